@@ -1,0 +1,272 @@
+//! α0: the node parameter for which the interpolatory rule (28) of odd degree r
+//! gains one degree of precision (Theorem 7, eq. 36).
+//!
+//! The defect of the rule on the degree-(r+1) monomials is a smooth function of
+//! α on (0, 1/3). We bracket the sign changes of the defect on s^(r+1), bisect
+//! each to full precision, and accept a root only if the defect vanishes on
+//! *every* degree-(r+1) monomial there. The rule is invariant under the
+//! symmetries of the triangle, so the defect lives on the symmetric polynomials
+//! of degree r+1 modulo lower degree: one of them (e2) for r = 1, one (e2²) for
+//! r = 3, but two (e2³, e3²) for r = 5 — two equations in one unknown, which
+//! generically have no common root. When no α0 exists we report the α that
+//! minimises the degree-(r+1) defect, with the defect left there as evidence.
+
+use crate::nodes::NodeSet;
+use crate::quadrature::monomial_integral;
+use serde::Serialize;
+
+/// What the search for α0 found for one degree r.
+#[derive(Clone, Debug, Serialize)]
+pub struct Alpha0Report {
+    /// The polynomial degree r.
+    pub degree: usize,
+    /// α0 when it exists (odd r only).
+    pub alpha0: Option<f64>,
+    /// The α in (0, 1/3) minimising the largest relative degree-(r+1) defect
+    /// (equal to α0 when α0 exists).
+    pub best_alpha: f64,
+    /// The largest relative defect on a degree-(r+1) monomial at `best_alpha`.
+    pub best_defect: f64,
+    /// Degree of precision of the rule at `best_alpha`.
+    pub precision_at_best: usize,
+    /// Roots of the defect on s^(r+1) that were rejected, with the largest
+    /// relative defect on the other monomials there.
+    pub rejected_roots: Vec<(f64, f64)>,
+    /// One sentence saying what was found and why.
+    pub reason: String,
+}
+
+/// A defect this small (relative to the monomial's integral) counts as zero.
+const ZERO_DEFECT: f64 = 1e-12;
+
+fn relative_defects(r: usize, alpha: f64) -> Vec<f64> {
+    let set = NodeSet::new(r, alpha).expect("alpha inside (0, 1/3)");
+    set.defects(r + 1)
+        .iter()
+        .enumerate()
+        .map(|(a, e)| e / monomial_integral(a, r + 1 - a))
+        .collect()
+}
+
+fn max_abs(v: &[f64]) -> f64 {
+    v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
+}
+
+/// Searches (0, 1/3) for α0 of degree `r` (0 ≤ r ≤ 6).
+pub fn find_alpha0(r: usize) -> Alpha0Report {
+    if r == 0 {
+        return Alpha0Report {
+            degree: 0,
+            alpha0: None,
+            best_alpha: 0.0,
+            best_defect: 0.0,
+            precision_at_best: 1,
+            rejected_roots: vec![],
+            reason: "r = 0 has the single centroid node, which does not depend on α (its rule already has degree 1 = r + 1).".into(),
+        };
+    }
+    const SAMPLES: usize = 600;
+    let lo = 1e-6;
+    let hi = 1.0 / 3.0 - 1e-6;
+    let grid: Vec<f64> = (0..=SAMPLES)
+        .map(|i| lo + (hi - lo) * i as f64 / SAMPLES as f64)
+        .collect();
+    let lead = |a: f64| relative_defects(r, a)[r + 1]; // monomial s^(r+1)
+    let values: Vec<f64> = grid.iter().map(|&a| lead(a)).collect();
+
+    let mut accepted = Vec::new();
+    let mut rejected_roots = Vec::new();
+    for i in 0..SAMPLES {
+        let (fa, fb) = (values[i], values[i + 1]);
+        if fa == 0.0 || fa.signum() != fb.signum() {
+            let root = bisect(&lead, grid[i], grid[i + 1]);
+            let defect = max_abs(&relative_defects(r, root));
+            if defect <= ZERO_DEFECT {
+                accepted.push((root, defect));
+            } else {
+                rejected_roots.push((root, defect));
+            }
+        }
+    }
+
+    // The minimiser of the full defect (also catches a double root).
+    let norm = |a: f64| max_abs(&relative_defects(r, a));
+    let (ibest, _) = grid
+        .iter()
+        .map(|&a| norm(a))
+        .enumerate()
+        .fold((0, f64::INFINITY), |b, (i, v)| if v < b.1 { (i, v) } else { b });
+    let (mut best_alpha, mut best_defect) = golden_section(
+        &norm,
+        grid[ibest.saturating_sub(1)],
+        grid[(ibest + 1).min(SAMPLES)],
+    );
+    if let Some(&(a, d)) = accepted.iter().min_by(|x, y| x.1.total_cmp(&y.1)) {
+        best_alpha = a;
+        best_defect = d;
+    } else if best_defect <= ZERO_DEFECT {
+        accepted.push((best_alpha, best_defect));
+    }
+    let precision_at_best = NodeSet::new(r, best_alpha)
+        .map(|s| s.precision())
+        .unwrap_or(r);
+
+    let (alpha0, reason) = if r % 2 == 0 {
+        (
+            None,
+            format!(
+                "α0 is defined for odd r (Theorem 7); for even r = {r} the node error is O(h^{}) for every α (Theorem 9). The α minimising the degree-{} defect is {best_alpha:.15}, leaving a relative defect of {best_defect:.3e}.",
+                r + 2,
+                r + 1
+            ),
+        )
+    } else if let Some(&(a, d)) = accepted.first() {
+        (
+            Some(a),
+            format!(
+                "At α0 = {a:.16} the interpolatory rule integrates every monomial of degree {} to a relative defect of {d:.1e}: its degree of precision rises from {r} to {precision_at_best}.",
+                r + 1
+            ),
+        )
+    } else {
+        let evidence = rejected_roots
+            .iter()
+            .map(|(a, d)| format!("at α = {a:.12} the defect on s^{} vanishes but another degree-{} monomial keeps a relative defect of {d:.3e}", r + 1, r + 1))
+            .collect::<Vec<_>>()
+            .join("; ");
+        (
+            None,
+            format!(
+                "No α in (0, 1/3) makes the rule exact for all degree-{} monomials: {}{}the smallest achievable relative defect is {best_defect:.3e}, at α = {best_alpha:.15}.",
+                r + 1,
+                evidence,
+                if evidence.is_empty() { "" } else { "; " }
+            ),
+        )
+    };
+    Alpha0Report {
+        degree: r,
+        alpha0,
+        best_alpha,
+        best_defect,
+        precision_at_best,
+        rejected_roots,
+        reason,
+    }
+}
+
+/// The α that `--alpha auto` uses: α0 when it exists, else the defect minimiser
+/// (for r = 0 any α; we return 0.1, which the centroid node ignores).
+pub fn auto_alpha(r: usize) -> f64 {
+    if r == 0 {
+        return 0.1;
+    }
+    let rep = find_alpha0(r);
+    rep.alpha0.unwrap_or(rep.best_alpha)
+}
+
+/// Bisection to full double precision on a bracket with a sign change.
+fn bisect(f: &dyn Fn(f64) -> f64, mut a: f64, mut b: f64) -> f64 {
+    let mut fa = f(a);
+    if fa == 0.0 {
+        return a;
+    }
+    for _ in 0..200 {
+        let m = 0.5 * (a + b);
+        if m <= a || m >= b {
+            break;
+        }
+        let fm = f(m);
+        if fm == 0.0 {
+            return m;
+        }
+        if fm.signum() == fa.signum() {
+            a = m;
+            fa = fm;
+        } else {
+            b = m;
+        }
+    }
+    // Of the two final bracket ends, the one with the smaller |f|.
+    if f(a).abs() <= f(b).abs() {
+        a
+    } else {
+        b
+    }
+}
+
+/// Golden-section search for the minimum of a unimodal `f` on [a, b]: (x, f(x)).
+fn golden_section(f: &dyn Fn(f64) -> f64, mut a: f64, mut b: f64) -> (f64, f64) {
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    let mut c = b - g * (b - a);
+    let mut d = a + g * (b - a);
+    let (mut fc, mut fd) = (f(c), f(d));
+    for _ in 0..200 {
+        if (b - a).abs() < 1e-16 {
+            break;
+        }
+        if fc < fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - g * (b - a);
+            fc = f(c);
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + g * (b - a);
+            fd = f(d);
+        }
+    }
+    let x = 0.5 * (a + b);
+    (x, f(x))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// α0(1) = 1/6 exactly (the three-point rule at (1/6, 1/6), (2/3, 1/6), (1/6, 2/3)).
+    #[test]
+    fn alpha0_of_degree_one_is_one_sixth() {
+        let rep = find_alpha0(1);
+        let a = rep.alpha0.expect("α0(1) exists");
+        assert!((a - 1.0 / 6.0).abs() < 1e-15, "{a}");
+        assert_eq!(rep.precision_at_best, 2);
+    }
+
+    /// r = 3: α0 exists and lifts the 10-node rule to degree 4 (checked on the
+    /// monomials independently of the search).
+    #[test]
+    fn alpha0_of_degree_three_lifts_precision() {
+        let rep = find_alpha0(3);
+        let a = rep.alpha0.expect("α0(3) exists");
+        assert!(a > 0.0 && a < 1.0 / 3.0);
+        let set = NodeSet::new(3, a).unwrap();
+        assert_eq!(set.precision(), 4);
+        // Away from α0 the rule has degree 3 only.
+        assert_eq!(NodeSet::new(3, a + 0.01).unwrap().precision(), 3);
+    }
+
+    /// r = 5: two symmetric invariants of degree 6 must vanish at once; the report
+    /// states the outcome with the defect left at the best α as evidence.
+    #[test]
+    fn alpha0_of_degree_five_reports_evidence() {
+        let rep = find_alpha0(5);
+        match rep.alpha0 {
+            Some(a) => assert_eq!(NodeSet::new(5, a).unwrap().precision(), 6),
+            None => {
+                assert!(rep.best_defect > ZERO_DEFECT);
+                assert!(rep.reason.contains("No α"));
+                assert_eq!(NodeSet::new(5, rep.best_alpha).unwrap().precision(), 5);
+            }
+        }
+    }
+
+    #[test]
+    fn even_degrees_have_no_alpha0() {
+        assert!(find_alpha0(2).alpha0.is_none());
+        assert!(find_alpha0(0).alpha0.is_none());
+    }
+}

@@ -1,0 +1,54 @@
+//! Assembly of the geometric collocation matrix
+//!
+//!   Gm[i, (k, j)] = (1/π) ∫_σ G(v_i, m_k(s, t)) l_j(s, t) |D_s m_k × D_t m_k| dσ   (eq. 19)
+//!
+//! without the reflectivity, so that every colour channel reuses it: the system
+//! of channel c is (I - diag(ρ_c) Gm) u = E_c.
+//!
+//! [`AssemblyPlan`] decides once how every pair is integrated; an
+//! [`AssemblyBackend`] executes the plan ([`CpuBackend`] here, the GPU backend in
+//! `radcol-gpu`).
+
+pub mod cpu;
+pub mod integrate;
+pub mod plan;
+
+pub use cpu::CpuBackend;
+pub use integrate::{ElementIntegrator, FieldPoint, QuadratureOptions};
+pub use plan::{AssemblyPlan, FarTable, FillMode, PlanStats};
+
+use crate::error::Error;
+use crate::matrix::DenseMatrix;
+use serde::Serialize;
+
+/// What executed an assembly: for reports and JSON.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct BackendInfo {
+    /// "cpu" or "gpu".
+    pub kind: String,
+    /// Device description (adapter name and driver, or thread count).
+    pub device: String,
+    /// "f64" or "f32".
+    pub precision: String,
+}
+
+/// The result of one assembly.
+#[derive(Debug)]
+pub struct Assembled {
+    /// The geometric matrix Gm, N × N.
+    pub matrix: DenseMatrix,
+    /// Kernel evaluations G(v_i, Q) performed.
+    pub kernel_evals: u64,
+    /// Device time (GPU timestamp queries), when measured.
+    pub device_seconds: Option<f64>,
+    /// Wall time of the assembly, seconds.
+    pub wall_seconds: f64,
+}
+
+/// Executes an [`AssemblyPlan`].
+pub trait AssemblyBackend: Send + Sync {
+    /// Which backend, device and precision.
+    fn info(&self) -> BackendInfo;
+    /// Fills the geometric matrix of `plan`.
+    fn assemble(&self, plan: &AssemblyPlan) -> Result<Assembled, Error>;
+}

@@ -1,0 +1,426 @@
+//! The assembly plan: for every (element of the collocation point, element
+//! integrated over) pair, which regime and which rule. Computed once, executed
+//! by any [`AssemblyBackend`](super::AssemblyBackend); CPU and GPU read the same
+//! classes and the same far-rule tables, so they agree to rounding.
+//!
+//! The f_r collocation points of one element form a *row block* and share a
+//! class with each element: far pairs are judged from the block's nearest point,
+//! so one rule serves all f_r rows and the element's quadrature data is loaded
+//! once per block (it stays in L1 while the f_r rows are filled).
+
+use super::integrate::{far_degree, piece_ball, ElementIntegrator, FieldPoint, QuadratureOptions};
+use crate::discretization::Discretization;
+use crate::quadrature::{RuleLadder, MAX_RULE_DEGREE};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::sync::Arc;
+
+/// Class code: G = 0 on the whole pair (coplanar or back-facing).
+pub const CLASS_CULLED: u8 = 0;
+/// Class code: near pair, adaptive subdivision (CPU).
+pub const CLASS_NEAR: u8 = 254;
+/// Class code: the collocation point lies on the element (curved elements), split at the point (CPU).
+pub const CLASS_SELF: u8 = 255;
+
+/// Far-rule data of one degree for every element, structure-of-arrays.
+///
+/// For element k and rule point q, index `k * nq + q`: position (`px`, `py`,
+/// `pz`), inner normal (`nx`, `ny`, `nz`) and `wj` = weight × Jacobian / π.
+/// `basis[j * nq + q]` = l_j at rule point q (the same for all elements).
+#[derive(Clone, Debug)]
+pub struct FarTable {
+    /// Degree of precision of the rule.
+    pub degree: usize,
+    /// Rule points per element.
+    pub nq: usize,
+    /// Lagrange basis at the rule points, `f_r × nq`, row j contiguous:
+    /// `basis[j * nq + q]` = l_j(point q).
+    pub basis: Vec<f64>,
+    /// The same, transposed: `basis_t[q * f_r + j]`.
+    pub basis_t: Vec<f64>,
+    /// x of the rule points, `n × nq`.
+    pub px: Vec<f64>,
+    /// y of the rule points.
+    pub py: Vec<f64>,
+    /// z of the rule points.
+    pub pz: Vec<f64>,
+    /// x of the inner normals.
+    pub nx: Vec<f64>,
+    /// y of the inner normals.
+    pub ny: Vec<f64>,
+    /// z of the inner normals.
+    pub nz: Vec<f64>,
+    /// weight × Jacobian / π.
+    pub wj: Vec<f64>,
+}
+
+/// Pair counts (collocation point × element) and far kernel evaluations.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct PlanStats {
+    /// Pairs integrated with one far rule.
+    pub pairs_far: u64,
+    /// Pairs integrated adaptively.
+    pub pairs_near: u64,
+    /// Pairs whose collocation point lies on the element (curved surfaces).
+    pub pairs_self: u64,
+    /// Pairs with G ≡ 0 (coplanar, back-facing), not integrated.
+    pub pairs_culled: u64,
+    /// Kernel evaluations of the far pairs: Σ rule points.
+    pub far_kernel_evals: u64,
+}
+
+/// Which parts of a row block to fill.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FillMode {
+    /// Every entry.
+    All,
+    /// Only near and self pairs (what a GPU backend leaves to the CPU).
+    SpecialOnly,
+}
+
+/// The assembly plan of one discretization.
+#[derive(Debug)]
+pub struct AssemblyPlan {
+    disc: Arc<Discretization>,
+    opts: QuadratureOptions,
+    ladder: RuleLadder,
+    classes: Vec<u8>,
+    tables: Vec<Option<FarTable>>,
+    stats: PlanStats,
+}
+
+impl AssemblyPlan {
+    /// Classifies every pair and builds the far-rule tables that are used.
+    pub fn new(disc: Arc<Discretization>, opts: QuadratureOptions) -> Self {
+        let mesh = disc.mesh().clone();
+        let n = mesh.len();
+        let f = disc.nodes_per_element();
+        let r = disc.nodes().degree();
+        let balls: Vec<_> = (0..n)
+            .into_par_iter()
+            .map(|k| {
+                let flat = mesh.is_flat(k);
+                let (c, rad) = piece_ball(&mesh, k, [[0., 0.], [1., 0.], [0., 1.]], !flat);
+                (c, rad, flat)
+            })
+            .collect();
+        let flat_geom: Vec<_> = (0..n)
+            .map(|k| {
+                let v = mesh.vertices(k);
+                let nrm = mesh.point(k, 1.0 / 3.0, 1.0 / 3.0).normal;
+                (v, nrm)
+            })
+            .collect();
+        let pts = disc.points();
+        let tol = opts.tol;
+        let classes: Vec<u8> = (0..n)
+            .into_par_iter()
+            .flat_map_iter(|kp| {
+                let block = &pts[kp * f..(kp + 1) * f];
+                let balls = &balls;
+                let flat_geom = &flat_geom;
+                (0..n).map(move |k| {
+                    let (c, rad, flat) = balls[k];
+                    if k == kp {
+                        return if flat { CLASS_CULLED } else { CLASS_SELF };
+                    }
+                    let (verts, nk) = flat_geom[k];
+                    let all_culled = block.iter().all(|p| {
+                        let scale = 1e-12 * (rad + (p.position - c).length());
+                        if flat {
+                            let behind_k = (p.position - verts[0]).dot(nk) <= scale;
+                            let all_behind_p =
+                                verts.iter().all(|v| (*v - p.position).dot(p.normal) <= scale);
+                            behind_k || all_behind_p
+                        } else {
+                            (c - p.position).dot(p.normal) + rad <= 0.0
+                        }
+                    });
+                    if all_culled {
+                        return CLASS_CULLED;
+                    }
+                    let dmin = block
+                        .iter()
+                        .map(|p| (p.position - c).length())
+                        .fold(f64::INFINITY, f64::min);
+                    match far_degree(tol, rad, dmin, r, !flat) {
+                        Some(d) => (d + 1) as u8,
+                        None => CLASS_NEAR,
+                    }
+                })
+            })
+            .collect();
+
+        let ladder = RuleLadder::new();
+        let mut used = [false; MAX_RULE_DEGREE + 1];
+        let mut stats = PlanStats::default();
+        for &c in &classes {
+            match c {
+                CLASS_CULLED => stats.pairs_culled += f as u64,
+                CLASS_NEAR => stats.pairs_near += f as u64,
+                CLASS_SELF => stats.pairs_self += f as u64,
+                d => {
+                    let d = (d - 1) as usize;
+                    used[d] = true;
+                    stats.pairs_far += f as u64;
+                    stats.far_kernel_evals += (f * ladder.rule(d).len()) as u64;
+                }
+            }
+        }
+        let tables = (0..=MAX_RULE_DEGREE)
+            .map(|d| used[d].then(|| build_table(&disc, &ladder, d)))
+            .collect();
+        Self {
+            disc,
+            opts,
+            ladder,
+            classes,
+            tables,
+            stats,
+        }
+    }
+
+    /// The discretization.
+    pub fn discretization(&self) -> &Arc<Discretization> {
+        &self.disc
+    }
+
+    /// Quadrature options.
+    pub fn options(&self) -> &QuadratureOptions {
+        &self.opts
+    }
+
+    /// The rule ladder.
+    pub fn ladder(&self) -> &RuleLadder {
+        &self.ladder
+    }
+
+    /// Class codes, `n × n`, row-major by (element of the collocation block, element):
+    /// [`CLASS_CULLED`], far degree + 1, [`CLASS_NEAR`] or [`CLASS_SELF`].
+    pub fn classes(&self) -> &[u8] {
+        &self.classes
+    }
+
+    /// The far table of degree `d`, when some pair uses it.
+    pub fn far_table(&self, d: usize) -> Option<&FarTable> {
+        self.tables.get(d).and_then(|t| t.as_ref())
+    }
+
+    /// Pair statistics.
+    pub fn stats(&self) -> PlanStats {
+        self.stats
+    }
+
+    /// Matrix dimension N.
+    pub fn dim(&self) -> usize {
+        self.disc.len()
+    }
+
+    /// An integrator with this plan's options over its mesh.
+    pub fn integrator(&self) -> ElementIntegrator<'_> {
+        ElementIntegrator::new(self.disc.mesh(), &self.ladder, self.opts.clone())
+    }
+
+    /// Fills the row block of element `kp`: `block` holds its f_r rows of the
+    /// geometric matrix (length f_r · N, row-major). Returns kernel evaluations.
+    pub fn fill_block(&self, kp: usize, block: &mut [f64], mode: FillMode) -> u64 {
+        let n = self.disc.mesh().len();
+        let f = self.disc.nodes_per_element();
+        let ncols = n * f;
+        debug_assert_eq!(block.len(), f * ncols);
+        let pts = &self.disc.points()[kp * f..(kp + 1) * f];
+        let classes = &self.classes[kp * n..(kp + 1) * n];
+        let integrator = self.integrator();
+        let nodes = self.disc.nodes();
+        let phi = |_k: usize, st: [f64; 2], _q: glam::DVec3, out: &mut [f64]| {
+            nodes.eval_basis(st[0], st[1], out)
+        };
+        let r = nodes.degree();
+        let mut g = vec![0.0f64; RUN_CHUNK * self.ladder.rule(MAX_RULE_DEGREE).len()];
+        let mut evals = 0u64;
+        let mut k = 0;
+        while k < n {
+            // A run of consecutive elements with one class: refinement numbers
+            // children consecutively, so neighbours in space share a rule and
+            // their rule points are contiguous in the far table.
+            let class = classes[k];
+            let mut end = k + 1;
+            while end < n && end - k < RUN_CHUNK && classes[end] == class {
+                end += 1;
+            }
+            match class {
+                CLASS_CULLED => {
+                    if mode == FillMode::All {
+                        for row in 0..f {
+                            block[row * ncols + k * f..row * ncols + end * f].fill(0.0);
+                        }
+                    }
+                }
+                CLASS_NEAR | CLASS_SELF => {
+                    for ke in k..end {
+                        for (row, p) in pts.iter().enumerate() {
+                            let out = &mut block[row * ncols + ke * f..row * ncols + (ke + 1) * f];
+                            out.fill(0.0);
+                            let fp = FieldPoint {
+                                position: p.position,
+                                normal: p.normal,
+                                on_element: Some((kp, p.st)),
+                            };
+                            evals += integrator.integrate(&fp, ke, r, &phi, out);
+                        }
+                    }
+                }
+                code if mode == FillMode::All => {
+                    let t = self.tables[(code - 1) as usize]
+                        .as_ref()
+                        .expect("plan builds every table it uses");
+                    let nq = t.nq;
+                    let span = k * nq..end * nq;
+                    let len = span.len();
+                    let g = &mut g[..len];
+                    for (row, p) in pts.iter().enumerate() {
+                        far_kernel_row(
+                            p.position,
+                            p.normal,
+                            &t.px[span.clone()],
+                            &t.py[span.clone()],
+                            &t.pz[span.clone()],
+                            &t.nx[span.clone()],
+                            &t.ny[span.clone()],
+                            &t.nz[span.clone()],
+                            &t.wj[span.clone()],
+                            g,
+                        );
+                        let out = &mut block[row * ncols + k * f..row * ncols + end * f];
+                        contract(g, &t.basis_t, nq, f, out);
+                    }
+                    evals += (f * len) as u64;
+                }
+                _ => {}
+            }
+            k = end;
+        }
+        evals
+    }
+}
+
+/// Elements per run at most (bounds the kernel buffer).
+const RUN_CHUNK: usize = 64;
+
+/// out[e * f + j] = Σ_q g[e * nq + q] · basis_t[q * f + j] for every element e
+/// of a run: one small product per element, accumulated in registers for the
+/// node counts of r = 0..=6 (no horizontal reductions).
+#[inline]
+fn contract(g: &[f64], basis_t: &[f64], nq: usize, f: usize, out: &mut [f64]) {
+    match f {
+        1 => contract_fixed::<1>(g, basis_t, nq, out),
+        3 => contract_fixed::<3>(g, basis_t, nq, out),
+        6 => contract_fixed::<6>(g, basis_t, nq, out),
+        10 => contract_fixed::<10>(g, basis_t, nq, out),
+        15 => contract_fixed::<15>(g, basis_t, nq, out),
+        21 => contract_fixed::<21>(g, basis_t, nq, out),
+        28 => contract_fixed::<28>(g, basis_t, nq, out),
+        _ => {
+            for (ge, oe) in g.chunks_exact(nq).zip(out.chunks_exact_mut(f)) {
+                oe.fill(0.0);
+                for (gq, bq) in ge.iter().zip(basis_t.chunks_exact(f)) {
+                    for (o, b) in oe.iter_mut().zip(bq) {
+                        *o += gq * b;
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[inline]
+fn contract_fixed<const F: usize>(g: &[f64], basis_t: &[f64], nq: usize, out: &mut [f64]) {
+    let basis_t = &basis_t[..nq * F];
+    for (ge, oe) in g.chunks_exact(nq).zip(out.chunks_exact_mut(F)) {
+        let mut acc = [0.0f64; F];
+        for (gq, bq) in ge.iter().zip(basis_t.chunks_exact(F)) {
+            for j in 0..F {
+                acc[j] += gq * bq[j];
+            }
+        }
+        oe.copy_from_slice(&acc);
+    }
+}
+
+/// g[q] = G(P, Q_q) · wj[q] for one collocation point against one element's rule
+/// points: the hot loop of far assembly, written over slices so it vectorises.
+#[inline]
+pub fn far_kernel_row(
+    p: glam::DVec3,
+    n_p: glam::DVec3,
+    px: &[f64],
+    py: &[f64],
+    pz: &[f64],
+    nx: &[f64],
+    ny: &[f64],
+    nz: &[f64],
+    wj: &[f64],
+    g: &mut [f64],
+) {
+    let nq = g.len();
+    let (px, py, pz) = (&px[..nq], &py[..nq], &pz[..nq]);
+    let (nx, ny, nz, wj) = (&nx[..nq], &ny[..nq], &nz[..nq], &wj[..nq]);
+    for q in 0..nq {
+        let dx = px[q] - p.x;
+        let dy = py[q] - p.y;
+        let dz = pz[q] - p.z;
+        let a = (dx * n_p.x + dy * n_p.y + dz * n_p.z).max(0.0);
+        let b = (-(dx * nx[q] + dy * ny[q] + dz * nz[q])).max(0.0);
+        let r2 = dx * dx + dy * dy + dz * dz;
+        g[q] = a * b / (r2 * r2) * wj[q];
+    }
+}
+
+fn build_table(disc: &Discretization, ladder: &RuleLadder, d: usize) -> FarTable {
+    let rule = ladder.rule(d);
+    let nq = rule.len();
+    let mesh = disc.mesh();
+    let n = mesh.len();
+    let f = disc.nodes_per_element();
+    let mut basis = vec![0.0; f * nq];
+    let mut basis_t = vec![0.0; f * nq];
+    let mut l = vec![0.0; f];
+    for (q, &[s, t]) in rule.points.iter().enumerate() {
+        disc.nodes().eval_basis(s, t, &mut l);
+        for j in 0..f {
+            basis[j * nq + q] = l[j];
+            basis_t[q * f + j] = l[j];
+        }
+    }
+    let per_elem: Vec<[f64; 7]> = (0..n)
+        .into_par_iter()
+        .flat_map_iter(|k| {
+            rule.points.iter().zip(&rule.weights).map(move |(&[s, t], &w)| {
+                let q = mesh.point(k, s, t);
+                [
+                    q.position.x,
+                    q.position.y,
+                    q.position.z,
+                    q.normal.x,
+                    q.normal.y,
+                    q.normal.z,
+                    w * q.jacobian * std::f64::consts::FRAC_1_PI,
+                ]
+            })
+        })
+        .collect();
+    let col = |c: usize| per_elem.iter().map(|v| v[c]).collect::<Vec<f64>>();
+    FarTable {
+        degree: rule.degree,
+        nq,
+        basis,
+        basis_t,
+        px: col(0),
+        py: col(1),
+        pz: col(2),
+        nx: col(3),
+        ny: col(4),
+        nz: col(5),
+        wj: col(6),
+    }
+}

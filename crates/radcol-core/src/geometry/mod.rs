@@ -1,0 +1,96 @@
+//! Surfaces as unions of patches S_j = F_j(R_j) (paper eq. 9–10).
+//!
+//! A patch's parameter domain R_j is a planar polygon embedded in R^3 (a face of
+//! an octahedron, a wall of a box), triangulated into base triangles. The map F_j
+//! carries exact first derivatives, so curved elements get their exact Jacobian
+//! |D_s m_k × D_t m_k| and normal: the geometry adds no error of its own.
+
+pub mod shapes;
+
+use glam::DVec3;
+use std::fmt::Debug;
+use std::sync::Arc;
+
+/// A smooth map F from a planar parameter polygon (embedded in R^3) onto a surface patch.
+pub trait SurfaceMap: Send + Sync + Debug {
+    /// F(x).
+    fn map(&self, x: DVec3) -> DVec3;
+    /// The derivative DF(x) applied to the direction `v`.
+    fn push_forward(&self, x: DVec3, v: DVec3) -> DVec3;
+    /// True when F is affine: elements are flat, with constant normal and Jacobian.
+    fn is_affine(&self) -> bool {
+        false
+    }
+}
+
+/// F(x) = x: flat patches (polyhedra, OBJ faces).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Identity;
+
+impl SurfaceMap for Identity {
+    fn map(&self, x: DVec3) -> DVec3 {
+        x
+    }
+    fn push_forward(&self, _x: DVec3, v: DVec3) -> DVec3 {
+        v
+    }
+    fn is_affine(&self) -> bool {
+        true
+    }
+}
+
+/// F(x) = center + semi_axes ⊙ x/|x|: the radial projection of a polyhedron around
+/// the origin onto an ellipsoid (a sphere when all semi-axes are equal).
+#[derive(Clone, Copy, Debug)]
+pub struct RadialProjection {
+    /// Centre of the ellipsoid.
+    pub center: DVec3,
+    /// Semi-axes (a, b, c), all positive.
+    pub semi_axes: DVec3,
+}
+
+impl SurfaceMap for RadialProjection {
+    fn map(&self, x: DVec3) -> DVec3 {
+        self.center + self.semi_axes * (x / x.length())
+    }
+    fn push_forward(&self, x: DVec3, v: DVec3) -> DVec3 {
+        // d(x/|x|)·v = (v - x̂ (x̂·v)) / |x|
+        let len = x.length();
+        let xh = x / len;
+        self.semi_axes * ((v - xh * xh.dot(v)) / len)
+    }
+}
+
+/// One patch: a map and the base triangles of its parameter polygon.
+///
+/// Each base triangle `[a, b, c]` is ordered so that the mapped tangent cross
+/// product D_s m × D_t m points to the *inside* of the enclosure (the side light
+/// leaves from), with m(s, t) = F(a + s (b - a) + t (c - a)).
+#[derive(Clone, Debug)]
+pub struct Patch {
+    /// A name for reports ("octant +x+y+z", "floor", an OBJ group).
+    pub name: String,
+    /// The map F_j.
+    pub map: Arc<dyn SurfaceMap>,
+    /// The triangulation of R_j, points in the parameter polygon.
+    pub triangles: Vec<[DVec3; 3]>,
+}
+
+/// A surface S = S_1 ∪ … ∪ S_J (eq. 9).
+#[derive(Clone, Debug)]
+pub struct Surface {
+    /// A short name for reports ("sphere", "box:1,1,1").
+    pub name: String,
+    /// The patches.
+    pub patches: Vec<Patch>,
+    /// True when S is known to lie on the boundary of a convex set, so that no
+    /// pair of points can be occluded (the paper's "unoccluded" case).
+    pub convex_enclosure: bool,
+}
+
+impl Surface {
+    /// Number of base triangles over all patches.
+    pub fn base_triangle_count(&self) -> usize {
+        self.patches.iter().map(|p| p.triangles.len()).sum()
+    }
+}

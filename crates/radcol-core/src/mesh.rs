@@ -1,0 +1,371 @@
+//! Triangulations T_n = {Δ_1, …, Δ_n} of a surface (eq. 11–12), refined uniformly
+//! 4:1 in parameter space.
+//!
+//! Midpoint refinement of every base triangle keeps the triangulation
+//! *symmetric* (pairs of triangles form parallelograms) and conforming (T1–T3)
+//! across patches whose maps agree on shared edges, as the superconvergence
+//! theorems 7 and 9 require.
+
+use crate::geometry::{Surface, SurfaceMap};
+use glam::DVec3;
+use std::sync::Arc;
+
+/// One element Δ_k = F_j(Δ̂_k), with the parameter triangle Δ̂_k = [a, b, c].
+///
+/// The element map is m_k(s, t) = F_j(a + s (b - a) + t (c - a)) for (s, t) in σ.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Element {
+    /// Index of the patch j in [`Surface::patches`].
+    pub patch: u32,
+    /// Vertices of the parameter triangle Δ̂_k.
+    pub param: [DVec3; 3],
+}
+
+/// A point on an element with everything the kernel needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfacePoint {
+    /// Position m_k(s, t).
+    pub position: DVec3,
+    /// Inner unit normal.
+    pub normal: DVec3,
+    /// Area element |D_s m_k × D_t m_k| (area of Δ_k per unit area of σ).
+    pub jacobian: f64,
+}
+
+/// Where a field is evaluated: a point of S with its normal and its place in
+/// the parametrisation (patch and parameter point).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Site {
+    /// Position on S.
+    pub position: DVec3,
+    /// Inner unit normal.
+    pub normal: DVec3,
+    /// Patch index j.
+    pub patch: usize,
+    /// The parameter point x with F_j(x) = position.
+    pub param: DVec3,
+}
+
+/// A triangulated surface.
+#[derive(Clone, Debug)]
+pub struct Mesh {
+    surface: Arc<Surface>,
+    level: u32,
+    elements: Vec<Element>,
+}
+
+impl Mesh {
+    /// The base triangulation of `surface` refined `level` times (4^level children each).
+    pub fn new(surface: Arc<Surface>, level: u32) -> Self {
+        let mut elements: Vec<Element> = surface
+            .patches
+            .iter()
+            .enumerate()
+            .flat_map(|(j, p)| {
+                p.triangles.iter().map(move |&param| Element {
+                    patch: j as u32,
+                    param,
+                })
+            })
+            .collect();
+        for _ in 0..level {
+            elements = elements.iter().flat_map(|e| e.children()).collect();
+        }
+        Self {
+            surface,
+            level,
+            elements,
+        }
+    }
+
+    /// Builds a mesh from explicit elements (for example an OBJ triangulation).
+    pub fn from_elements(surface: Arc<Surface>, level: u32, elements: Vec<Element>) -> Self {
+        Self {
+            surface,
+            level,
+            elements,
+        }
+    }
+
+    /// The surface meshed.
+    pub fn surface(&self) -> &Arc<Surface> {
+        &self.surface
+    }
+
+    /// Refinement level above the base triangulation.
+    pub fn level(&self) -> u32 {
+        self.level
+    }
+
+    /// The elements Δ_1 … Δ_n.
+    pub fn elements(&self) -> &[Element] {
+        &self.elements
+    }
+
+    /// Number of elements n.
+    pub fn len(&self) -> usize {
+        self.elements.len()
+    }
+
+    /// True when the mesh has no element.
+    pub fn is_empty(&self) -> bool {
+        self.elements.is_empty()
+    }
+
+    /// The map F_j of element `k`.
+    #[inline]
+    pub fn map_of(&self, k: usize) -> &dyn SurfaceMap {
+        &*self.surface.patches[self.elements[k].patch as usize].map
+    }
+
+    /// True when element `k` is flat (affine map).
+    pub fn is_flat(&self, k: usize) -> bool {
+        self.map_of(k).is_affine()
+    }
+
+    /// m_k(s, t).
+    #[inline]
+    pub fn position(&self, k: usize, s: f64, t: f64) -> DVec3 {
+        let e = &self.elements[k];
+        self.map_of(k).map(e.param_point(s, t))
+    }
+
+    /// Position, inner normal and Jacobian at (s, t) of element `k`.
+    pub fn point(&self, k: usize, s: f64, t: f64) -> SurfacePoint {
+        let e = &self.elements[k];
+        let f = self.map_of(k);
+        let x = e.param_point(s, t);
+        let ds = f.push_forward(x, e.param[1] - e.param[0]);
+        let dt = f.push_forward(x, e.param[2] - e.param[0]);
+        let cross = ds.cross(dt);
+        let jacobian = cross.length();
+        SurfacePoint {
+            position: f.map(x),
+            normal: cross / jacobian,
+            jacobian,
+        }
+    }
+
+    /// The [`Site`] at (s, t) of element `k` (for evaluating fields).
+    pub fn site(&self, k: usize, s: f64, t: f64) -> Site {
+        let p = self.point(k, s, t);
+        Site {
+            position: p.position,
+            normal: p.normal,
+            patch: self.elements[k].patch as usize,
+            param: self.elements[k].param_point(s, t),
+        }
+    }
+
+    /// The tangents (D_s m_k, D_t m_k) at (s, t).
+    pub fn tangents(&self, k: usize, s: f64, t: f64) -> (DVec3, DVec3) {
+        let e = &self.elements[k];
+        let f = self.map_of(k);
+        let x = e.param_point(s, t);
+        (
+            f.push_forward(x, e.param[1] - e.param[0]),
+            f.push_forward(x, e.param[2] - e.param[0]),
+        )
+    }
+
+    /// Finds the element and (s, t) of a point on S (within `1e-9` of the surface
+    /// relative to the element size), by Gauss–Newton on m_k(s, t) = x over the
+    /// elements whose bounding ball contains x.
+    pub fn locate(&self, x: DVec3) -> Option<(usize, [f64; 2])> {
+        let mut best: Option<(usize, [f64; 2], f64)> = None;
+        for k in 0..self.len() {
+            let (c, rad) = self.bounding_ball(k);
+            if (x - c).length() > rad * 1.1 + 1e-12 {
+                continue;
+            }
+            let (mut s, mut t) = (1.0 / 3.0, 1.0 / 3.0);
+            for _ in 0..30 {
+                let r = self.position(k, s, t) - x;
+                let (ds, dt) = self.tangents(k, s, t);
+                let (a11, a12, a22) = (ds.dot(ds), ds.dot(dt), dt.dot(dt));
+                let (b1, b2) = (-ds.dot(r), -dt.dot(r));
+                let det = a11 * a22 - a12 * a12;
+                if det <= 0.0 {
+                    break;
+                }
+                let (d1, d2) = ((a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det);
+                s += d1;
+                t += d2;
+                if d1.abs() + d2.abs() < 1e-15 {
+                    break;
+                }
+            }
+            let miss = (self.position(k, s, t) - x).length();
+            let eps = 1e-9;
+            if s >= -eps && t >= -eps && s + t <= 1.0 + eps && miss <= 1e-9 * rad.max(1e-300) {
+                let st = [s.clamp(0.0, 1.0), t.clamp(0.0, 1.0)];
+                if best.as_ref().is_none_or(|b| miss < b.2) {
+                    best = Some((k, st, miss));
+                }
+            }
+        }
+        best.map(|(k, st, _)| (k, st))
+    }
+
+    /// Mapped vertices of element `k`.
+    pub fn vertices(&self, k: usize) -> [DVec3; 3] {
+        let e = &self.elements[k];
+        let f = self.map_of(k);
+        e.param.map(|x| f.map(x))
+    }
+
+    /// A ball containing element `k`: (centre, radius). The centre is the image of
+    /// the parameter centroid; the radius covers the mapped vertices and edge
+    /// midpoints with a 5 % margin for curvature.
+    pub fn bounding_ball(&self, k: usize) -> (DVec3, f64) {
+        let c = self.position(k, 1.0 / 3.0, 1.0 / 3.0);
+        let probes = [
+            (0.0, 0.0),
+            (1.0, 0.0),
+            (0.0, 1.0),
+            (0.5, 0.0),
+            (0.5, 0.5),
+            (0.0, 0.5),
+        ];
+        let r = probes
+            .iter()
+            .map(|&(s, t)| (self.position(k, s, t) - c).length())
+            .fold(0.0, f64::max);
+        (c, r * if self.is_flat(k) { 1.0 } else { 1.05 })
+    }
+
+    /// Mesh size h (eq. 11): the largest diameter of a parameter triangle.
+    pub fn h(&self) -> f64 {
+        self.elements
+            .iter()
+            .map(|e| e.param_diameter())
+            .fold(0.0, f64::max)
+    }
+
+    /// Shape ratios r(Δ) = diameter / inradius (eq. 32) of the straight triangles
+    /// through each element's mapped vertices: (min, max).
+    pub fn shape_ratio_range(&self) -> (f64, f64) {
+        (0..self.len())
+            .map(|k| shape_ratio(self.vertices(k)))
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(r), hi.max(r)))
+    }
+
+    /// Total surface area ∫_S 1, with a rule exact to high degree on each element.
+    pub fn area(&self) -> f64 {
+        let rule = crate::quadrature::collapsed::collapsed_rule(12);
+        (0..self.len())
+            .map(|k| {
+                if self.is_flat(k) {
+                    0.5 * self.point(k, 0.0, 0.0).jacobian
+                } else {
+                    rule.points
+                        .iter()
+                        .zip(&rule.weights)
+                        .map(|(&[s, t], w)| w * self.point(k, s, t).jacobian)
+                        .sum()
+                }
+            })
+            .sum()
+    }
+}
+
+impl Element {
+    /// The parameter point a + s (b - a) + t (c - a).
+    #[inline]
+    pub fn param_point(&self, s: f64, t: f64) -> DVec3 {
+        let [a, b, c] = self.param;
+        a + (b - a) * s + (c - a) * t
+    }
+
+    /// The four children of 4:1 midpoint refinement, in the parent's orientation.
+    pub fn children(&self) -> [Element; 4] {
+        let [a, b, c] = self.param;
+        let (ab, bc, ca) = ((a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5);
+        [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]].map(|param| Element {
+            patch: self.patch,
+            param,
+        })
+    }
+
+    /// Diameter (longest edge) of the parameter triangle.
+    pub fn param_diameter(&self) -> f64 {
+        let [a, b, c] = self.param;
+        (b - a).length().max((c - b).length()).max((a - c).length())
+    }
+}
+
+/// Diameter over inradius of a triangle (eq. 32); 2√3 ≈ 3.46 for an equilateral one.
+pub fn shape_ratio([a, b, c]: [DVec3; 3]) -> f64 {
+    let (la, lb, lc) = ((b - c).length(), (c - a).length(), (a - b).length());
+    let area = 0.5 * (b - a).cross(c - a).length();
+    let inradius = 2.0 * area / (la + lb + lc);
+    la.max(lb).max(lc) / inradius
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::shapes::{box_room, ellipsoid, sphere};
+    use std::f64::consts::PI;
+
+    #[test]
+    fn refinement_quadruples_and_halves_h() {
+        let s = Arc::new(sphere(1.0));
+        let m0 = Mesh::new(s.clone(), 0);
+        let m2 = Mesh::new(s, 2);
+        assert_eq!(m0.len(), 8);
+        assert_eq!(m2.len(), 128);
+        assert!((m0.h() / m2.h() - 4.0).abs() < 1e-14);
+    }
+
+    /// Areas against closed forms: the exact maps carry exact Jacobians.
+    #[test]
+    fn areas_match_closed_forms() {
+        let m = Mesh::new(Arc::new(sphere(2.0)), 3);
+        assert!((m.area() - 16.0 * PI).abs() < 1e-9 * 16.0 * PI, "{}", m.area());
+        let b = Mesh::new(Arc::new(box_room(1.0, 2.0, 3.0)), 1);
+        assert!((b.area() - 22.0).abs() < 1e-13);
+        // Spheroid a = b = 1, c = 2: 2π(1 + c² asin(e)/(c e)), e = √(1 - 1/c²).
+        let e = (1.0f64 - 0.25).sqrt();
+        let exact = 2.0 * PI * (1.0 + 2.0 * e.asin() / e);
+        let m = Mesh::new(Arc::new(ellipsoid(1.0, 1.0, 2.0)), 3);
+        assert!((m.area() - exact).abs() < 1e-8 * exact, "{} vs {exact}", m.area());
+    }
+
+    /// Normals are unit and inner: on the sphere n = -P/R.
+    #[test]
+    fn sphere_normals_are_inner() {
+        let m = Mesh::new(Arc::new(sphere(2.0)), 1);
+        for k in 0..m.len() {
+            let p = m.point(k, 0.2, 0.3);
+            assert!((p.normal + p.position / 2.0).length() < 1e-14);
+        }
+    }
+
+    /// Conformity (T3): every edge of the refined sphere is shared by exactly two elements.
+    #[test]
+    fn refined_sphere_is_conforming() {
+        use std::collections::HashMap;
+        let m = Mesh::new(Arc::new(sphere(1.0)), 2);
+        let key = |p: DVec3| [p.x, p.y, p.z].map(|v| (v * 1e9).round() as i64);
+        let mut edges: HashMap<_, usize> = HashMap::new();
+        for k in 0..m.len() {
+            let v = m.vertices(k);
+            for i in 0..3 {
+                let (a, b) = (key(v[i]), key(v[(i + 1) % 3]));
+                *edges.entry(if a < b { (a, b) } else { (b, a) }).or_default() += 1;
+            }
+        }
+        assert!(edges.values().all(|&c| c == 2));
+    }
+
+    #[test]
+    fn shape_ratio_of_equilateral_triangle() {
+        let r = shape_ratio([
+            DVec3::ZERO,
+            DVec3::X,
+            DVec3::new(0.5, 3f64.sqrt() / 2.0, 0.0),
+        ]);
+        assert!((r - 2.0 * 3f64.sqrt()).abs() < 1e-12);
+    }
+}

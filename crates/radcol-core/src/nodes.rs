@@ -1,0 +1,257 @@
+//! Interpolation nodes q_ij(α) on σ (eq. 13), their Lagrange basis (eq. 14), the
+//! interpolatory weights ω_j (eq. 16) and the rule's degree of precision.
+//!
+//! The nodes are the uniform lattice of step 1/r on the shrunken triangle with
+//! vertices (α, α), (1 - 2α, α), (α, 1 - 2α). In barycentric coordinates λ of that
+//! triangle, the basis function of the node with lattice indices (i, j, r-i-j) is
+//! the product formula
+//!
+//!   l_ij = P_i(λ_s) P_j(λ_t) P_{r-i-j}(λ_u),   P_m(λ) = Π_{k<m} (r λ - k)/(k + 1),
+//!
+//! which is exact, needs no linear solve and is stable for every r ≤ 6.
+
+use crate::error::InputError;
+use crate::quadrature::{collapsed::collapsed_rule, monomial_integral};
+
+/// Largest polynomial degree supported.
+pub const MAX_DEGREE: usize = 6;
+
+/// The collocation node set of degree `r` with parameter `alpha`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NodeSet {
+    degree: usize,
+    alpha: f64,
+    /// Lattice indices (i, j): node q_ij.
+    indices: Vec<(usize, usize)>,
+    /// Node coordinates (s, t) in σ.
+    points: Vec<[f64; 2]>,
+    /// ω_j = ∫_σ l_j.
+    weights: Vec<f64>,
+}
+
+impl NodeSet {
+    /// Nodes of degree `r` ∈ 0..=6 and 0 < α < 1/3 (α is ignored for r = 0,
+    /// whose single node is the centroid).
+    pub fn new(r: usize, alpha: f64) -> Result<Self, InputError> {
+        if r > MAX_DEGREE {
+            return Err(InputError::Degree { degree: r });
+        }
+        if r > 0 && !(alpha > 0.0 && alpha < 1.0 / 3.0) {
+            return Err(InputError::Alpha { alpha });
+        }
+        let mut indices = Vec::new();
+        // Order: i + j ascending rows, as (13) enumerates them.
+        for j in 0..=r {
+            for i in 0..=(r - j) {
+                indices.push((i, j));
+            }
+        }
+        let points = indices
+            .iter()
+            .map(|&(i, j)| {
+                if r == 0 {
+                    [1.0 / 3.0, 1.0 / 3.0]
+                } else {
+                    let rf = r as f64;
+                    [
+                        (i as f64 + (rf - 3.0 * i as f64) * alpha) / rf,
+                        (j as f64 + (rf - 3.0 * j as f64) * alpha) / rf,
+                    ]
+                }
+            })
+            .collect();
+        let mut set = Self {
+            degree: r,
+            alpha: if r == 0 { 0.0 } else { alpha },
+            indices,
+            points,
+            weights: Vec::new(),
+        };
+        // ω_j = ∫ l_j, exactly: the basis has degree r.
+        let rule = collapsed_rule(r);
+        let f = set.len();
+        let mut w = vec![0.0; f];
+        let mut l = vec![0.0; f];
+        for (&[s, t], &wq) in rule.points.iter().zip(&rule.weights) {
+            set.eval_basis(s, t, &mut l);
+            for (wj, lj) in w.iter_mut().zip(&l) {
+                *wj += wq * lj;
+            }
+        }
+        set.weights = w;
+        Ok(set)
+    }
+
+    /// The polynomial degree r.
+    pub fn degree(&self) -> usize {
+        self.degree
+    }
+
+    /// The node parameter α (0 for r = 0).
+    pub fn alpha(&self) -> f64 {
+        self.alpha
+    }
+
+    /// Number of nodes f_r = (r + 1)(r + 2)/2.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// Always false: every node set has at least one node.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Node coordinates (s, t), length f_r.
+    pub fn points(&self) -> &[[f64; 2]] {
+        &self.points
+    }
+
+    /// Lattice indices (i, j) of the nodes, length f_r.
+    pub fn indices(&self) -> &[(usize, usize)] {
+        &self.indices
+    }
+
+    /// Interpolatory weights ω_j = ∫_σ l_j (eq. 16), length f_r, summing to 1/2.
+    pub fn weights(&self) -> &[f64] {
+        &self.weights
+    }
+
+    /// Writes l_j(s, t) for every node j into `out` (length f_r).
+    pub fn eval_basis(&self, s: f64, t: f64, out: &mut [f64]) {
+        let r = self.degree;
+        if r == 0 {
+            out[0] = 1.0;
+            return;
+        }
+        let scale = 1.0 / (1.0 - 3.0 * self.alpha);
+        let rf = r as f64;
+        let ls = (s - self.alpha) * scale * rf;
+        let lt = (t - self.alpha) * scale * rf;
+        let lu = rf - ls - lt;
+        // P_m(λ) for m = 0..=r at the three (scaled) coordinates.
+        let table = |x: f64| {
+            let mut p = [0.0; MAX_DEGREE + 1];
+            p[0] = 1.0;
+            for m in 1..=r {
+                p[m] = p[m - 1] * (x - (m - 1) as f64) / m as f64;
+            }
+            p
+        };
+        let (ps, pt, pu) = (table(ls), table(lt), table(lu));
+        for (o, &(i, j)) in out.iter_mut().zip(&self.indices) {
+            *o = ps[i] * pt[j] * pu[r - i - j];
+        }
+    }
+
+    /// Σ_j ω_j g(q_j): the interpolatory rule (16)/(28) applied to `g`.
+    pub fn integrate<F: Fn(f64, f64) -> f64>(&self, g: F) -> f64 {
+        self.points
+            .iter()
+            .zip(&self.weights)
+            .map(|(&[s, t], w)| w * g(s, t))
+            .sum()
+    }
+
+    /// Defects ∫_σ m - Σ ω_j m(q_j) of the rule on the monomials s^a t^b, a + b = d.
+    pub fn defects(&self, d: usize) -> Vec<f64> {
+        (0..=d)
+            .map(|a| {
+                let b = d - a;
+                monomial_integral(a, b)
+                    - self.integrate(|s, t| s.powi(a as i32) * t.powi(b as i32))
+            })
+            .collect()
+    }
+
+    /// The degree of precision of the interpolatory rule (16): the largest d such
+    /// that all monomials of degree ≤ d are integrated to 1e-13 relative.
+    pub fn precision(&self) -> usize {
+        let mut d = 0;
+        while d < 4 * MAX_DEGREE {
+            let ok = self
+                .defects(d + 1)
+                .iter()
+                .enumerate()
+                .all(|(a, e)| e.abs() <= 1e-13 * monomial_integral(a, d + 1 - a));
+            if !ok {
+                break;
+            }
+            d += 1;
+        }
+        d
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn basis_is_cardinal_and_partition_of_unity() {
+        for r in 0..=MAX_DEGREE {
+            let set = NodeSet::new(r, 0.1).unwrap();
+            assert_eq!(set.len(), (r + 1) * (r + 2) / 2);
+            let mut l = vec![0.0; set.len()];
+            for (k, &[s, t]) in set.points().iter().enumerate() {
+                set.eval_basis(s, t, &mut l);
+                for (j, v) in l.iter().enumerate() {
+                    let want = if j == k { 1.0 } else { 0.0 };
+                    assert!((v - want).abs() < 1e-13, "r={r} node {k} basis {j}: {v}");
+                }
+            }
+            set.eval_basis(0.77, 0.05, &mut l);
+            assert!((l.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        }
+    }
+
+    /// Interpolation reproduces every polynomial of degree ≤ r.
+    #[test]
+    fn basis_reproduces_polynomials() {
+        for r in 1..=MAX_DEGREE {
+            let set = NodeSet::new(r, 0.07).unwrap();
+            let p = |s: f64, t: f64| (1.0 + 2.0 * s - t).powi(r as i32) + s.powi(r as i32 - 1) * t;
+            let vals: Vec<f64> = set.points().iter().map(|&[s, t]| p(s, t)).collect();
+            let mut l = vec![0.0; set.len()];
+            for &(s, t) in &[(0.0, 0.0), (1.0, 0.0), (0.2, 0.7), (0.4, 0.1)] {
+                set.eval_basis(s, t, &mut l);
+                let interp: f64 = l.iter().zip(&vals).map(|(a, b)| a * b).sum();
+                assert!((interp - p(s, t)).abs() < 1e-10, "r={r}");
+            }
+        }
+    }
+
+    #[test]
+    fn nodes_are_interior_and_match_equation_13() {
+        let set = NodeSet::new(3, 0.1).unwrap();
+        // q_{1,0} = ((1 + 0·α)/3, (0 + 3α)/3) = (1/3, α).
+        let k = set.indices().iter().position(|&ij| ij == (1, 0)).unwrap();
+        let [s, t] = set.points()[k];
+        assert!((s - 1.0 / 3.0).abs() < 1e-16 && (t - 0.1).abs() < 1e-16);
+        assert!(set
+            .points()
+            .iter()
+            .all(|&[s, t]| s > 0.0 && t > 0.0 && s + t < 1.0));
+        assert!((set.weights().iter().sum::<f64>() - 0.5).abs() < 1e-15);
+    }
+
+    #[test]
+    fn precision_is_at_least_r() {
+        for r in 0..=MAX_DEGREE {
+            let p = NodeSet::new(r, 0.13).unwrap().precision();
+            assert!(p >= r, "r={r}: precision {p}");
+        }
+        // The centroid rule has degree 1; the 3-node rule at α = 1/6 has degree 2.
+        assert_eq!(NodeSet::new(0, 0.1).unwrap().precision(), 1);
+        assert_eq!(NodeSet::new(1, 1.0 / 6.0).unwrap().precision(), 2);
+        assert_eq!(NodeSet::new(1, 0.1).unwrap().precision(), 1);
+    }
+
+    #[test]
+    fn rejects_bad_input() {
+        assert!(NodeSet::new(7, 0.1).is_err());
+        assert!(NodeSet::new(2, 0.0).is_err());
+        assert!(NodeSet::new(2, 1.0 / 3.0).is_err());
+        assert!(NodeSet::new(2, f64::NAN).is_err());
+    }
+}

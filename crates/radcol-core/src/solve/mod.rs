@@ -1,0 +1,372 @@
+//! Linear solvers for the collocation system `(I - diag(rho) G) u = e`.
+//!
+//! Two solvers, because the two regimes need different tools: the system
+//! matrix is dense and well conditioned (`rho < 1`, `G` has row sums `<= 1`),
+//! so restarted GMRES ([`gmres`]) converges in a handful of mat-vecs and never
+//! needs the matrix explicitly (it can be matrix-free or GPU-backed), while a
+//! dense LU ([`DenseLu`]) is the robust reference and pays off when many
+//! right-hand sides (colour channels) share one factorisation.
+//!
+//! Every solver follows the pattern "options in, info or error out":
+//! [`GmresParams`] in, [`GmresInfo`] or [`SolveError`] out.
+
+mod gmres;
+mod lu;
+
+pub use gmres::{gmres, GmresInfo, GmresParams};
+pub use lu::DenseLu;
+
+use crate::matrix::{dot, DenseMatrix};
+use rayon::prelude::*;
+
+/// A square linear operator `y = A x` (dense, matrix-free or GPU-backed).
+pub trait LinearOperator: Sync {
+    /// Dimension `n` (the operator is `n × n`).
+    fn dim(&self) -> usize;
+    /// `y = A x`; `x.len() == y.len() == dim()`.
+    fn apply(&self, x: &[f64], y: &mut [f64]);
+}
+
+/// A dense matrix as an operator. Only square matrices are operators:
+/// `dim()` is `nrows()` and [`LinearOperator::apply`] panics on a
+/// non-square matrix.
+impl LinearOperator for DenseMatrix {
+    fn dim(&self) -> usize {
+        self.nrows()
+    }
+
+    fn apply(&self, x: &[f64], y: &mut [f64]) {
+        assert_eq!(
+            self.nrows(),
+            self.ncols(),
+            "a DenseMatrix used as a LinearOperator must be square"
+        );
+        self.matvec(x, y);
+    }
+}
+
+/// The radiosity system operator `A = I - diag(rho) * gm`, where `gm` is the
+/// geometric collocation matrix (shared by all colour channels) and `rho` the
+/// reflectivity at each collocation point.
+///
+/// Invariants (checked by [`RadiosityOperator::new`], asserted by `apply`):
+/// `gm` is square and `rho.len() == gm.nrows()`.
+#[derive(Clone, Copy, Debug)]
+pub struct RadiosityOperator<'a> {
+    /// Geometric collocation matrix `G` (`n × n`).
+    pub gm: &'a DenseMatrix,
+    /// Reflectivity at each collocation point (length `n`).
+    pub rho: &'a [f64],
+}
+
+impl<'a> RadiosityOperator<'a> {
+    /// Checks the dimensions: `gm` square and `rho.len() == gm.nrows()`.
+    pub fn new(gm: &'a DenseMatrix, rho: &'a [f64]) -> Result<Self, SolveError> {
+        if gm.ncols() != gm.nrows() {
+            return Err(SolveError::DimensionMismatch {
+                expected: gm.nrows(),
+                found: gm.ncols(),
+            });
+        }
+        if rho.len() != gm.nrows() {
+            return Err(SolveError::DimensionMismatch {
+                expected: gm.nrows(),
+                found: rho.len(),
+            });
+        }
+        Ok(Self { gm, rho })
+    }
+
+    fn assert_shape(&self) {
+        assert_eq!(self.gm.nrows(), self.gm.ncols(), "gm must be square");
+        assert_eq!(self.rho.len(), self.gm.nrows(), "rho.len() != gm.nrows()");
+    }
+
+    /// The explicit matrix `I - diag(rho) gm` (for [`DenseLu`]).
+    pub fn to_dense(&self) -> DenseMatrix {
+        self.assert_shape();
+        let n = self.gm.nrows();
+        let mut a = DenseMatrix::zeros(n, n);
+        if n == 0 {
+            return a;
+        }
+        a.as_mut_slice()
+            .par_chunks_exact_mut(n)
+            .zip(self.gm.as_slice().par_chunks_exact(n))
+            .zip(self.rho.par_iter())
+            .enumerate()
+            .for_each(|(i, ((arow, grow), &r))| {
+                for (aij, &gij) in arow.iter_mut().zip(grow) {
+                    *aij = -r * gij;
+                }
+                arow[i] += 1.0;
+            });
+        a
+    }
+}
+
+impl LinearOperator for RadiosityOperator<'_> {
+    fn dim(&self) -> usize {
+        self.gm.nrows()
+    }
+
+    /// `y = x - rho .* (gm x)`, parallel over rows.
+    fn apply(&self, x: &[f64], y: &mut [f64]) {
+        self.assert_shape();
+        let n = self.gm.nrows();
+        assert_eq!(x.len(), n, "x.len() != dim()");
+        assert_eq!(y.len(), n, "y.len() != dim()");
+        if n == 0 {
+            return;
+        }
+        y.par_iter_mut()
+            .zip(self.gm.as_slice().par_chunks_exact(n))
+            .zip(self.rho.par_iter())
+            .zip(x.par_iter())
+            .for_each(|(((yi, row), &r), &xi)| *yi = xi - r * dot(row, x));
+    }
+}
+
+/// Why a solve failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SolveError {
+    /// A vector or matrix does not have the dimension the operator needs.
+    #[error("dimension mismatch: expected {expected}, found {found}")]
+    DimensionMismatch {
+        /// The dimension required (the operator's `n`).
+        expected: usize,
+        /// The dimension supplied.
+        found: usize,
+    },
+    /// The iteration limit was reached before the relative residual
+    /// tolerance `rel_tol` was met.
+    #[error(
+        "not converged: relative residual {residual:e} still above rel_tol after {iterations} iterations"
+    )]
+    NotConverged {
+        /// Iterations (operator applications in the Krylov loop) performed.
+        iterations: usize,
+        /// True relative residual `||b - A x|| / ||b||` of the returned `x`.
+        residual: f64,
+    },
+    /// The LU factorisation found a zero or non-finite pivot, or the solve
+    /// produced non-finite values (the matrix is singular to working precision).
+    #[error("matrix is singular: zero or non-finite pivot at index {pivot}")]
+    Singular {
+        /// Index of the offending pivot (the smallest one when the solution
+        /// overflowed).
+        pivot: usize,
+    },
+    /// The right-hand side, the initial guess, the matrix or an operator
+    /// output contained NaN or infinity.
+    #[error("input or operator output contains NaN or infinity")]
+    NonFinite,
+}
+
+fn all_finite(v: &[f64]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+#[cfg(test)]
+pub(crate) mod test_util {
+    //! Deterministic test matrices and independent (plain-loop) reference
+    //! arithmetic, shared by the solver tests.
+    use crate::matrix::DenseMatrix;
+
+    /// A 64-bit LCG (Knuth's MMIX constants): deterministic, dependency-free.
+    pub struct Lcg(pub u64);
+
+    impl Lcg {
+        /// Uniform in `[0, 1)`.
+        pub fn next_f64(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+
+        /// Uniform in `[-1, 1)`.
+        pub fn sym(&mut self) -> f64 {
+            2.0 * self.next_f64() - 1.0
+        }
+    }
+
+    /// `A = I - 0.9 K / ||K||_inf` with `K` uniform in `[-1, 1)`: non-symmetric,
+    /// `||A - I||_inf = 0.9`, so `||A^{-1}||_inf <= 10`.
+    pub fn well_conditioned(n: usize, seed: u64) -> DenseMatrix {
+        let mut rng = Lcg(seed);
+        let k: Vec<f64> = (0..n * n).map(|_| rng.sym()).collect();
+        let norm = (0..n)
+            .map(|i| k[i * n..(i + 1) * n].iter().map(|v| v.abs()).sum::<f64>())
+            .fold(0.0, f64::max);
+        let mut a = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                a[i * n + j] = -0.9 * k[i * n + j] / norm;
+            }
+            a[i * n + i] += 1.0;
+        }
+        DenseMatrix::from_row_major(n, n, a)
+    }
+
+    /// `y = A x` by a plain double loop (independent of `DenseMatrix::matvec`).
+    pub fn ref_matvec(a: &DenseMatrix, x: &[f64]) -> Vec<f64> {
+        let mut y = vec![0.0; a.nrows()];
+        for i in 0..a.nrows() {
+            let mut s = 0.0;
+            for j in 0..a.ncols() {
+                s += a.get(i, j) * x[j];
+            }
+            y[i] = s;
+        }
+        y
+    }
+
+    pub fn norm(v: &[f64]) -> f64 {
+        v.iter().map(|x| x * x).sum::<f64>().sqrt()
+    }
+
+    /// `||a - b|| / ||b||`.
+    pub fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
+        let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
+        norm(&d) / norm(b)
+    }
+
+    /// `||b - A x|| / ||b||` by plain loops.
+    pub fn ref_rel_residual(a: &DenseMatrix, x: &[f64], b: &[f64]) -> f64 {
+        rel_diff(&ref_matvec(a, x), b)
+    }
+
+    /// A smooth, sign-changing "true" solution.
+    pub fn x_true(n: usize) -> Vec<f64> {
+        (0..n)
+            .map(|i| 1.0 + (0.37 * i as f64).sin() + 0.01 * i as f64)
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_util::*;
+    use super::*;
+
+    /// A radiosity-like pair: `G >= 0` with row sums `0.95`, `rho` in `[0.2, 0.9]`.
+    fn radiosity_data(n: usize, seed: u64) -> (DenseMatrix, Vec<f64>) {
+        let mut rng = Lcg(seed);
+        let mut g = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                if i != j {
+                    g[i * n + j] = rng.next_f64();
+                }
+            }
+            let s: f64 = g[i * n..(i + 1) * n].iter().sum();
+            for j in 0..n {
+                g[i * n + j] *= 0.95 / s;
+            }
+        }
+        let rho = (0..n).map(|_| 0.2 + 0.7 * rng.next_f64()).collect();
+        (DenseMatrix::from_row_major(n, n, g), rho)
+    }
+
+    #[test]
+    fn radiosity_to_dense_matches_definition() {
+        let (g, rho) = radiosity_data(37, 5);
+        let a = RadiosityOperator::new(&g, &rho).unwrap().to_dense();
+        for i in 0..37 {
+            for j in 0..37 {
+                let delta = if i == j { 1.0 } else { 0.0 };
+                assert_eq!(a.get(i, j), delta - rho[i] * g.get(i, j));
+            }
+        }
+    }
+
+    #[test]
+    fn radiosity_apply_equals_to_dense_matvec() {
+        let n = 123;
+        let (g, rho) = radiosity_data(n, 11);
+        let op = RadiosityOperator { gm: &g, rho: &rho };
+        let x = x_true(n);
+        let mut y_op = vec![0.0; n];
+        op.apply(&x, &mut y_op);
+        let mut y_dense = vec![0.0; n];
+        op.to_dense().matvec(&x, &mut y_dense);
+        assert!(rel_diff(&y_op, &y_dense) < 1e-14);
+        // and both agree with the plain-loop definition x - rho .* (G x)
+        let gx = ref_matvec(&g, &x);
+        let y_ref: Vec<f64> = (0..n).map(|i| x[i] - rho[i] * gx[i]).collect();
+        assert!(rel_diff(&y_op, &y_ref) < 1e-14);
+    }
+
+    #[test]
+    fn radiosity_new_checks_dimensions() {
+        let (g, rho) = radiosity_data(10, 1);
+        assert!(matches!(
+            RadiosityOperator::new(&g, &rho[..9]),
+            Err(SolveError::DimensionMismatch {
+                expected: 10,
+                found: 9
+            })
+        ));
+        let rect = DenseMatrix::zeros(3, 4);
+        assert!(matches!(
+            RadiosityOperator::new(&rect, &[0.5; 3]),
+            Err(SolveError::DimensionMismatch {
+                expected: 3,
+                found: 4
+            })
+        ));
+    }
+
+    #[test]
+    fn gmres_and_lu_agree_on_radiosity_system() {
+        let n = 400;
+        let (g, rho) = radiosity_data(n, 23);
+        let op = RadiosityOperator::new(&g, &rho).unwrap();
+        let a = op.to_dense();
+        let xt = x_true(n);
+        // b = x - rho .* (G x) by plain loops
+        let gx = ref_matvec(&g, &xt);
+        let b: Vec<f64> = (0..n).map(|i| xt[i] - rho[i] * gx[i]).collect();
+
+        let mut x_gm = vec![0.0; n];
+        let info = gmres(&op, &b, &mut x_gm, &GmresParams::default()).unwrap();
+        assert!(info.residual <= 1e-12, "{info:?}");
+
+        let lu = DenseLu::factor(&a).unwrap();
+        let mut x_lu = b.clone();
+        lu.solve_in_place(&mut x_lu).unwrap();
+
+        assert!(rel_diff(&x_gm, &xt) < 1e-10);
+        assert!(rel_diff(&x_lu, &xt) < 1e-10);
+        assert!(rel_diff(&x_gm, &x_lu) < 1e-10);
+    }
+
+    #[test]
+    fn gmres_and_lu_agree_on_manufactured_system() {
+        let n = 300;
+        let a = well_conditioned(n, 42);
+        let xt = x_true(n);
+        let b = ref_matvec(&a, &xt);
+        let mut x_gm = vec![0.0; n];
+        gmres(&a, &b, &mut x_gm, &GmresParams::default()).unwrap();
+        let mut x_lu = b.clone();
+        DenseLu::factor(&a)
+            .unwrap()
+            .solve_in_place(&mut x_lu)
+            .unwrap();
+        assert!(rel_diff(&x_gm, &x_lu) < 1e-10);
+    }
+
+    #[test]
+    fn error_messages_are_informative() {
+        let e = SolveError::NotConverged {
+            iterations: 7,
+            residual: 1e-3,
+        };
+        let s = e.to_string();
+        assert!(s.contains("rel_tol") && s.contains('7'), "{s}");
+    }
+}
