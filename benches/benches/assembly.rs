@@ -1,1 +1,75 @@
-fn main(){}
+//! Assembly throughput: far-field kernel evaluations per second by degree, and
+//! whole assemblies by size. Plans are built outside the timed closures.
+//!
+//! Run: `cargo bench -p radcol-benches --bench assembly`.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use radcol_core::assembly::{
+    AssemblyBackend, AssemblyPlan, CpuBackend, FillMode, QuadratureOptions,
+};
+use radcol_core::discretization::Discretization;
+use radcol_core::geometry::shapes::{box_room, sphere};
+use radcol_core::geometry::Surface;
+use radcol_core::matrix::DenseMatrix;
+use radcol_core::mesh::Mesh;
+use radcol_core::nodes::NodeSet;
+use rayon::prelude::*;
+use std::sync::Arc;
+
+fn plan(surface: Surface, r: usize, level: u32) -> AssemblyPlan {
+    let mesh = Arc::new(Mesh::new(Arc::new(surface), level));
+    let disc = Arc::new(Discretization::new(mesh, NodeSet::new(r, 0.1).unwrap()));
+    AssemblyPlan::new(disc, QuadratureOptions::default())
+}
+
+/// Far-field kernel throughput on the box room (flat walls, 1/r² near edges),
+/// CPU backend, f64: elements/s in the report = kernel evaluations per second.
+fn far_field(c: &mut Criterion) {
+    let mut group = c.benchmark_group("far_field_cpu_f64");
+    group.sample_size(10);
+    for (r, level) in [(0, 4), (1, 3), (2, 3), (3, 2)] {
+        let p = plan(box_room(1.0, 1.0, 1.0), r, level);
+        let n = p.dim();
+        let f = p.discretization().nodes_per_element();
+        let mut m = DenseMatrix::zeros(n, n);
+        group.throughput(Throughput::Elements(p.stats().far_kernel_evals));
+        group.bench_function(BenchmarkId::new(format!("box_r{r}"), n), |b| {
+            b.iter(|| {
+                m.as_mut_slice()
+                    .par_chunks_exact_mut(f * n)
+                    .enumerate()
+                    .for_each(|(kp, block)| {
+                        p.fill_block(kp, block, FillMode::FarOnly);
+                    })
+            })
+        });
+    }
+    group.finish();
+}
+
+/// Whole assemblies (far, near and self pairs) by size and degree.
+fn assembly_by_size(c: &mut Criterion) {
+    let mut group = c.benchmark_group("assembly_cpu");
+    group.sample_size(10);
+    for (name, r, level) in [
+        ("sphere", 1, 2),
+        ("sphere", 1, 3),
+        ("sphere", 2, 3),
+        ("box", 1, 3),
+        ("box", 3, 2),
+    ] {
+        let surface = if name == "sphere" {
+            sphere(1.0)
+        } else {
+            box_room(1.0, 1.0, 1.0)
+        };
+        let p = plan(surface, r, level);
+        group.bench_function(BenchmarkId::new(format!("{name}_r{r}"), p.dim()), |b| {
+            b.iter(|| CpuBackend.assemble(&p).unwrap())
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, far_field, assembly_by_size);
+criterion_main!(benches);

@@ -14,10 +14,23 @@ fn main() {
     let l: u32 = args[2].parse().unwrap();
     let shape = args.get(3).cloned().unwrap_or("sphere".into());
     let tol: f64 = args.get(4).map(|s| s.parse().unwrap()).unwrap_or(1e-12);
-    let s = Arc::new(if shape == "box" { box_room(1.0, 1.0, 1.0) } else { sphere(1.0) });
-    let disc = Arc::new(Discretization::new(Arc::new(Mesh::new(s, l)), NodeSet::new(r, 0.1).unwrap()));
+    let s = Arc::new(if shape == "box" {
+        box_room(1.0, 1.0, 1.0)
+    } else {
+        sphere(1.0)
+    });
+    let disc = Arc::new(Discretization::new(
+        Arc::new(Mesh::new(s, l)),
+        NodeSet::new(r, 0.1).unwrap(),
+    ));
     let t = Instant::now();
-    let plan = AssemblyPlan::new(disc.clone(), QuadratureOptions { tol, ..Default::default() });
+    let plan = AssemblyPlan::new(
+        disc.clone(),
+        QuadratureOptions {
+            tol,
+            ..Default::default()
+        },
+    );
     println!("plan {:.3}s {:?}", t.elapsed().as_secs_f64(), plan.stats());
     println!("avg run {:.2}", runs(plan.classes(), disc.mesh().len()));
     let n = disc.len();
@@ -25,7 +38,12 @@ fn main() {
     for mode in [FillMode::SpecialOnly, FillMode::All] {
         let mut m = DenseMatrix::zeros(n, n);
         let t = Instant::now();
-        let ev: u64 = m.as_mut_slice().par_chunks_exact_mut(f * n).enumerate().map(|(k, b)| plan.fill_block(k, b, mode)).sum();
+        let ev: u64 = m
+            .as_mut_slice()
+            .par_chunks_exact_mut(f * n)
+            .enumerate()
+            .map(|(k, b)| plan.fill_block(k, b, mode))
+            .sum();
         let dt = t.elapsed().as_secs_f64();
         println!("{mode:?}: {dt:.3}s evals {ev} -> {:.3e}/s", ev as f64 / dt);
         if mode == FillMode::All {

@@ -91,11 +91,14 @@ pub fn find_alpha0(r: usize) -> Alpha0Report {
 
     // The minimiser of the full defect (also catches a double root).
     let norm = |a: f64| max_abs(&relative_defects(r, a));
-    let (ibest, _) = grid
-        .iter()
-        .map(|&a| norm(a))
-        .enumerate()
-        .fold((0, f64::INFINITY), |b, (i, v)| if v < b.1 { (i, v) } else { b });
+    let (ibest, _) =
+        grid.iter()
+            .map(|&a| norm(a))
+            .enumerate()
+            .fold(
+                (0, f64::INFINITY),
+                |b, (i, v)| if v < b.1 { (i, v) } else { b },
+            );
     let (mut best_alpha, mut best_defect) = golden_section(
         &norm,
         grid[ibest.saturating_sub(1)],

@@ -27,9 +27,9 @@ pub enum InputError {
         message: String,
     },
     /// rho outside [0, 1) at a collocation point.
-    #[error("reflectivity {name} = {value} at element {element}, node {node} (x, y, z = {:.6}, {:.6}, {:.6}) lies outside [0, 1)", position.x, position.y, position.z)]
+    #[error("{name} = {value} at element {element}, node {node} (x, y, z = {:.6}, {:.6}, {:.6}) lies outside [0, 1)", position.x, position.y, position.z)]
     Reflectivity {
-        /// Channel name.
+        /// "reflectivity" or "reflectivity R" (the channel).
         name: String,
         /// The offending value.
         value: f64,

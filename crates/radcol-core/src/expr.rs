@@ -144,7 +144,11 @@ mod tests {
         ];
         for (text, want) in cases {
             let e = Expr::parse(text).unwrap();
-            assert!((e.eval(p) - want).abs() < 1e-14, "{text}: {} vs {want}", e.eval(p));
+            assert!(
+                (e.eval(p) - want).abs() < 1e-14,
+                "{text}: {} vs {want}",
+                e.eval(p)
+            );
         }
     }
 

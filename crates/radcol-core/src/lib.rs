@@ -1,4 +1,35 @@
-//! radcol-core: collocation for the radiosity equation.
+//! # radcol-core
+//!
+//! Piecewise-polynomial collocation for the radiosity equation
+//!
+//! ```text
+//! u(P) - ρ(P)/π ∫_S u(Q) G(P,Q) dS_Q = E(P),   G = [(Q-P)·n_P][(P-Q)·n_Q] / |P-Q|⁴
+//! ```
+//!
+//! on triangulated surfaces, after Micula (2006): surfaces as smooth maps of
+//! planar polygons ([`geometry`]), uniformly refined meshes ([`mesh`]), interior
+//! nodes q_ij(α) with their Lagrange basis and the superconvergent α0
+//! ([`nodes`], [`alpha0`]), distance-adaptive quadrature ([`quadrature`],
+//! [`assembly`]), dense solvers ([`solve`]), solutions and error norms
+//! ([`solution`], [`norms`]) and refinement studies ([`study`]).
+//!
+//! ```
+//! use radcol_core::assembly::CpuBackend;
+//! use radcol_core::geometry::shapes::sphere;
+//! use radcol_core::problem::{Field, Problem};
+//! use radcol_core::run::{solve, SolveConfig};
+//! use std::sync::Arc;
+//!
+//! // On the unit sphere G ≡ 1/4 and ∫_S G dS = π, so with ρ = 0.5 and E = 1 the
+//! // solution is the constant E / (1 - ρ) = 2.
+//! let problem = Problem::new(Arc::new(sphere(1.0)), Field::Constant(0.5), Field::Constant(1.0));
+//! let config = SolveConfig { degree: 1, level: 1, ..Default::default() };
+//! let outcome = solve(&problem, &config, &CpuBackend)?;
+//! for u in outcome.channels[0].solution.nodal() {
+//!     assert!((u - 2.0).abs() < 1e-10);
+//! }
+//! # Ok::<(), radcol_core::error::Error>(())
+//! ```
 pub mod alpha0;
 pub mod assembly;
 pub mod discretization;

@@ -27,7 +27,11 @@ impl DenseMatrix {
     /// # Panics
     /// If `data.len() != nrows * ncols` (a programming error, not bad input).
     pub fn from_row_major(nrows: usize, ncols: usize, data: Vec<f64>) -> Self {
-        assert_eq!(data.len(), nrows * ncols, "row-major data has the wrong length");
+        assert_eq!(
+            data.len(),
+            nrows * ncols,
+            "row-major data has the wrong length"
+        );
         Self { nrows, ncols, data }
     }
 

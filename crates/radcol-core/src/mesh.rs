@@ -247,7 +247,9 @@ impl Mesh {
     pub fn shape_ratio_range(&self) -> (f64, f64) {
         (0..self.len())
             .map(|k| shape_ratio(self.vertices(k)))
-            .fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(r), hi.max(r)))
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), r| {
+                (lo.min(r), hi.max(r))
+            })
     }
 
     /// Total surface area ∫_S 1, with a rule exact to high degree on each element.
@@ -322,14 +324,22 @@ mod tests {
     #[test]
     fn areas_match_closed_forms() {
         let m = Mesh::new(Arc::new(sphere(2.0)), 3);
-        assert!((m.area() - 16.0 * PI).abs() < 1e-9 * 16.0 * PI, "{}", m.area());
+        assert!(
+            (m.area() - 16.0 * PI).abs() < 1e-9 * 16.0 * PI,
+            "{}",
+            m.area()
+        );
         let b = Mesh::new(Arc::new(box_room(1.0, 2.0, 3.0)), 1);
         assert!((b.area() - 22.0).abs() < 1e-13);
         // Spheroid a = b = 1, c = 2: 2π(1 + c² asin(e)/(c e)), e = √(1 - 1/c²).
         let e = (1.0f64 - 0.25).sqrt();
         let exact = 2.0 * PI * (1.0 + 2.0 * e.asin() / e);
         let m = Mesh::new(Arc::new(ellipsoid(1.0, 1.0, 2.0)), 3);
-        assert!((m.area() - exact).abs() < 1e-8 * exact, "{} vs {exact}", m.area());
+        assert!(
+            (m.area() - exact).abs() < 1e-8 * exact,
+            "{} vs {exact}",
+            m.area()
+        );
     }
 
     /// Normals are unit and inner: on the sphere n = -P/R.
@@ -353,7 +363,9 @@ mod tests {
             let v = m.vertices(k);
             for i in 0..3 {
                 let (a, b) = (key(v[i]), key(v[(i + 1) % 3]));
-                *edges.entry(if a < b { (a, b) } else { (b, a) }).or_default() += 1;
+                *edges
+                    .entry(if a < b { (a, b) } else { (b, a) })
+                    .or_default() += 1;
             }
         }
         assert!(edges.values().all(|&c| c == 2));

@@ -158,8 +158,7 @@ impl NodeSet {
         (0..=d)
             .map(|a| {
                 let b = d - a;
-                monomial_integral(a, b)
-                    - self.integrate(|s, t| s.powi(a as i32) * t.powi(b as i32))
+                monomial_integral(a, b) - self.integrate(|s, t| s.powi(a as i32) * t.powi(b as i32))
             })
             .collect()
     }

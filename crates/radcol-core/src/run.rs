@@ -145,7 +145,11 @@ pub fn available_memory() -> Option<u64> {
 pub fn check_memory(unknowns: usize, solver: SolverKind) -> Result<(), InputError> {
     let n = unknowns as u64;
     let bytes_matrix = n.saturating_mul(n).saturating_mul(8);
-    let bytes_lu = if solver == SolverKind::Lu { bytes_matrix } else { 0 };
+    let bytes_lu = if solver == SolverKind::Lu {
+        bytes_matrix
+    } else {
+        0
+    };
     if let Some(avail) = available_memory() {
         if bytes_matrix.saturating_add(bytes_lu) > avail / 10 * 9 {
             return Err(InputError::TooLarge {
@@ -193,7 +197,11 @@ pub fn discretize(problem: &Problem, cfg: &SolveConfig) -> Result<Arc<Discretiza
 }
 
 /// Solves `problem` with `cfg`, assembling on `backend`.
-pub fn solve(problem: &Problem, cfg: &SolveConfig, backend: &dyn AssemblyBackend) -> Result<SolveOutcome, Error> {
+pub fn solve(
+    problem: &Problem,
+    cfg: &SolveConfig,
+    backend: &dyn AssemblyBackend,
+) -> Result<SolveOutcome, Error> {
     let t0 = Instant::now();
     let disc = discretize(problem, cfg)?;
     let h = disc.mesh().h();
@@ -201,12 +209,25 @@ pub fn solve(problem: &Problem, cfg: &SolveConfig, backend: &dyn AssemblyBackend
 
     let t = Instant::now();
     let mut fields = Vec::new();
+    let single = problem.channels.len() == 1;
     for ch in &problem.channels {
-        let rho = eval_at_nodes(&disc, &ch.rho, &format!("reflectivity {}", ch.name))?;
-        if let Some((i, &v)) = rho.iter().enumerate().find(|(_, v)| !(0.0..1.0).contains(*v)) {
+        // "reflectivity" alone for a scalar problem, "reflectivity R" for a colour channel.
+        let label = |what: &str| {
+            if single {
+                what.to_string()
+            } else {
+                format!("{what} {}", ch.name)
+            }
+        };
+        let rho = eval_at_nodes(&disc, &ch.rho, &label("reflectivity"))?;
+        if let Some((i, &v)) = rho
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !(0.0..1.0).contains(*v))
+        {
             let p = disc.points()[i];
             return Err(InputError::Reflectivity {
-                name: ch.name.clone(),
+                name: label("reflectivity"),
                 value: v,
                 element: p.element,
                 node: p.node,
@@ -214,7 +235,7 @@ pub fn solve(problem: &Problem, cfg: &SolveConfig, backend: &dyn AssemblyBackend
             }
             .into());
         }
-        let emission = eval_at_nodes(&disc, &ch.emission, &format!("emission {}", ch.name))?;
+        let emission = eval_at_nodes(&disc, &ch.emission, &label("emission"))?;
         fields.push((rho, emission));
     }
     let rhs_s = t.elapsed().as_secs_f64();
@@ -291,7 +312,12 @@ pub fn solve(problem: &Problem, cfg: &SolveConfig, backend: &dyn AssemblyBackend
 pub fn true_residual(op: &dyn LinearOperator, x: &[f64], b: &[f64]) -> f64 {
     let mut ax = vec![0.0; b.len()];
     op.apply(x, &mut ax);
-    let num: f64 = ax.iter().zip(b).map(|(a, b)| (b - a) * (b - a)).sum::<f64>().sqrt();
+    let num: f64 = ax
+        .iter()
+        .zip(b)
+        .map(|(a, b)| (b - a) * (b - a))
+        .sum::<f64>()
+        .sqrt();
     let den: f64 = b.iter().map(|v| v * v).sum::<f64>().sqrt();
     if den > 0.0 {
         num / den

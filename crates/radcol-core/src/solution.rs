@@ -57,7 +57,13 @@ impl Solution {
 
     /// û_n(P) = E(P) + ρ(P) (1/π) ∫_S G(P, Q) u_n(Q) dS_Q at a point P of S, with
     /// `integrator` over this solution's mesh; `rho` and `emission` are ρ(P), E(P).
-    pub fn iterated(&self, integrator: &ElementIntegrator<'_>, p: &FieldPoint, rho: f64, emission: f64) -> f64 {
+    pub fn iterated(
+        &self,
+        integrator: &ElementIntegrator<'_>,
+        p: &FieldPoint,
+        rho: f64,
+        emission: f64,
+    ) -> f64 {
         let f = self.disc.nodes_per_element();
         let nodes = self.disc.nodes();
         let phi = |k: usize, st: [f64; 2], _q: DVec3, out: &mut [f64]| {
@@ -89,7 +95,11 @@ pub fn integrate_nodal(disc: &Discretization, values: &[f64]) -> f64 {
         let rule = ladder.rule(if mesh.is_flat(k) { r } else { r + 6 });
         for (&[s, t], &w) in rule.points.iter().zip(&rule.weights) {
             disc.nodes().eval_basis(s, t, &mut l);
-            let u: f64 = l.iter().zip(&values[k * f..(k + 1) * f]).map(|(a, b)| a * b).sum();
+            let u: f64 = l
+                .iter()
+                .zip(&values[k * f..(k + 1) * f])
+                .map(|(a, b)| a * b)
+                .sum();
             total += w * mesh.point(k, s, t).jacobian * u;
         }
     }

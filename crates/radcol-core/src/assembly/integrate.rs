@@ -15,9 +15,10 @@
 
 use crate::kernel::g;
 use crate::mesh::Mesh;
-use crate::quadrature::{collapsed::square_rule, RuleLadder, TriangleRule, MAX_RULE_DEGREE};
+use crate::quadrature::{gauss::gauss_legendre01, RuleLadder, TriangleRule, MAX_RULE_DEGREE};
 use glam::DVec3;
 use std::f64::consts::FRAC_1_PI;
+use std::sync::Arc;
 
 /// Accuracy settings for element integrals.
 #[derive(Clone, Debug, PartialEq)]
@@ -62,13 +63,46 @@ pub struct ElementIntegrator<'a> {
     mesh: &'a Mesh,
     ladder: &'a RuleLadder,
     opts: QuadratureOptions,
-    self_rule: Vec<([f64; 2], f64)>,
+    self_rule: Arc<SelfRules>,
+}
+
+/// Gauss–Legendre rules on [0, 1] for self pairs: `radial` and `angular` with
+/// `self_order` points, `graded` with about half as many for each piece of a
+/// geometrically graded angular interval.
+#[derive(Clone, Debug)]
+pub struct SelfRules {
+    radial: (Vec<f64>, Vec<f64>),
+    angular: (Vec<f64>, Vec<f64>),
+    graded: (Vec<f64>, Vec<f64>),
+}
+
+impl SelfRules {
+    /// Rules for `order` points per direction.
+    pub fn new(order: usize) -> Self {
+        let order = order.max(2);
+        Self {
+            radial: gauss_legendre01(order),
+            angular: gauss_legendre01(order),
+            graded: gauss_legendre01(order.div_ceil(2) + 2),
+        }
+    }
 }
 
 impl<'a> ElementIntegrator<'a> {
     /// An integrator over `mesh` with rules from `ladder`.
     pub fn new(mesh: &'a Mesh, ladder: &'a RuleLadder, opts: QuadratureOptions) -> Self {
-        let self_rule = square_rule(opts.self_order);
+        let self_rule = Arc::new(SelfRules::new(opts.self_order));
+        Self::with_self_rule(mesh, ladder, opts, self_rule)
+    }
+
+    /// As [`new`](Self::new), reusing self-pair rules built once by the caller
+    /// with [`SelfRules::new`]`(opts.self_order)`.
+    pub fn with_self_rule(
+        mesh: &'a Mesh,
+        ladder: &'a RuleLadder,
+        opts: QuadratureOptions,
+        self_rule: Arc<SelfRules>,
+    ) -> Self {
         Self {
             mesh,
             ladder,
@@ -85,7 +119,13 @@ impl<'a> ElementIntegrator<'a> {
     /// The far-rule degree for an element (or piece) of bounding radius `radius` at
     /// distance `dist` from P, when the integrand carries a polynomial factor of
     /// degree `poly_degree`; `None` when no rule of the ladder is accurate enough.
-    pub fn far_degree(&self, radius: f64, dist: f64, poly_degree: usize, curved: bool) -> Option<usize> {
+    pub fn far_degree(
+        &self,
+        radius: f64,
+        dist: f64,
+        poly_degree: usize,
+        curved: bool,
+    ) -> Option<usize> {
         far_degree(self.opts.tol, radius, dist, poly_degree, curved)
     }
 
@@ -129,7 +169,8 @@ impl<'a> ElementIntegrator<'a> {
         for (&[x, y], &w) in rule.points.iter().zip(&rule.weights) {
             let st = [a[0] + x * e1[0] + y * e2[0], a[1] + x * e1[1] + y * e2[1]];
             let q = self.mesh.point(k, st[0], st[1]);
-            let gw = g(p.position, p.normal, q.position, q.normal) * q.jacobian * w * det * FRAC_1_PI;
+            let gw =
+                g(p.position, p.normal, q.position, q.normal) * q.jacobian * w * det * FRAC_1_PI;
             if gw == 0.0 {
                 continue;
             }
@@ -172,6 +213,12 @@ impl<'a> ElementIntegrator<'a> {
 
     /// Self pair: split σ at P's coordinates into three triangles with P as apex,
     /// each integrated in Duffy coordinates (u, v) ↦ P + u (A - P) + u v (B - A).
+    ///
+    /// When P is close to the edge AB the triangle is a sliver and the integrand
+    /// has a complex near-singularity in v at distance δ = dist(P, AB) / |AB| from
+    /// the foot of the perpendicular; the v-interval is therefore split at
+    /// geometrically graded points around the foot (δ, 2δ, 4δ, …), so that each
+    /// piece sees the singularity at a distance comparable to its length.
     fn integrate_self(
         &self,
         p: &FieldPoint,
@@ -192,30 +239,68 @@ impl<'a> ElementIntegrator<'a> {
             if det < 1e-300 {
                 continue; // P on this edge of σ: the piece has no area
             }
-            for &([u, v], w) in &self.self_rule {
-                let st = [
-                    st0[0] + u * pa[0] + u * v * ab[0],
-                    st0[1] + u * pa[1] + u * v * ab[1],
-                ];
-                let q = self.mesh.point(k, st[0], st[1]);
-                let gw = g(p.position, p.normal, q.position, q.normal)
-                    * q.jacobian
-                    * w
-                    * u
-                    * det
-                    * FRAC_1_PI;
-                evals += 1;
-                if gw == 0.0 {
-                    continue;
-                }
-                phi(k, st, q.position, &mut buf[..m]);
-                for (o, v) in out.iter_mut().zip(&buf[..m]) {
-                    *o += gw * v;
+            let ab2 = ab[0] * ab[0] + ab[1] * ab[1];
+            let foot = (-(pa[0] * ab[0] + pa[1] * ab[1]) / ab2).clamp(0.0, 1.0);
+            let delta = det / ab2;
+            let breaks = graded_breaks(foot, delta);
+            let (vx, vw) = if breaks.len() > 2 {
+                &self.self_rule.graded
+            } else {
+                &self.self_rule.angular
+            };
+            let (ux, uw) = &self.self_rule.radial;
+            for w in breaks.windows(2) {
+                let (v0, v1) = (w[0], w[1]);
+                for (&x, &wv) in vx.iter().zip(vw) {
+                    for (&u, &wu) in ux.iter().zip(uw) {
+                        let wt = wu * wv;
+                        let v = v0 + (v1 - v0) * x;
+                        let st = [
+                            st0[0] + u * pa[0] + u * v * ab[0],
+                            st0[1] + u * pa[1] + u * v * ab[1],
+                        ];
+                        let q = self.mesh.point(k, st[0], st[1]);
+                        let gw = g(p.position, p.normal, q.position, q.normal)
+                            * q.jacobian
+                            * wt
+                            * (v1 - v0)
+                            * u
+                            * det
+                            * FRAC_1_PI;
+                        evals += 1;
+                        if gw == 0.0 {
+                            continue;
+                        }
+                        phi(k, st, q.position, &mut buf[..m]);
+                        for (o, val) in out.iter_mut().zip(&buf[..m]) {
+                            *o += gw * val;
+                        }
+                    }
                 }
             }
         }
         evals
     }
+}
+
+/// Break points of [0, 1] graded geometrically towards `foot`: foot ± δ 2^j.
+fn graded_breaks(foot: f64, delta: f64) -> Vec<f64> {
+    let mut pts = vec![0.0, 1.0];
+    if delta < 0.25 {
+        pts.push(foot);
+        let mut h = delta;
+        while h < 1.0 {
+            for c in [foot - h, foot + h] {
+                if c > 0.0 && c < 1.0 {
+                    pts.push(c);
+                }
+            }
+            h *= 2.0;
+        }
+    }
+    pts.sort_by(f64::total_cmp);
+    pts.dedup_by(|a, b| (*a - *b).abs() < 1e-15);
+    pts
 }
 
 /// The far-rule degree, see [`ElementIntegrator::far_degree`].
@@ -224,7 +309,13 @@ impl<'a> ElementIntegrator<'a> {
 /// centre; a rule of degree p on a piece of radius R then errs by about
 /// (R / 2d)^(p+1) relative to the integral. A polynomial factor of degree q
 /// adds q to the degree needed, a curved Jacobian 2 more.
-pub fn far_degree(tol: f64, radius: f64, dist: f64, poly_degree: usize, curved: bool) -> Option<usize> {
+pub fn far_degree(
+    tol: f64,
+    radius: f64,
+    dist: f64,
+    poly_degree: usize,
+    curved: bool,
+) -> Option<usize> {
     if !(dist > radius * 1.0001) {
         return None;
     }

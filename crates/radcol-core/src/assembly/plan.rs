@@ -76,6 +76,8 @@ pub enum FillMode {
     All,
     /// Only near and self pairs (what a GPU backend leaves to the CPU).
     SpecialOnly,
+    /// Only far pairs (for throughput measurements of the far-field kernel).
+    FarOnly,
 }
 
 /// The assembly plan of one discretization.
@@ -84,6 +86,7 @@ pub struct AssemblyPlan {
     disc: Arc<Discretization>,
     opts: QuadratureOptions,
     ladder: RuleLadder,
+    self_rule: Arc<super::integrate::SelfRules>,
     classes: Vec<u8>,
     tables: Vec<Option<FarTable>>,
     stats: PlanStats,
@@ -129,8 +132,9 @@ impl AssemblyPlan {
                         let scale = 1e-12 * (rad + (p.position - c).length());
                         if flat {
                             let behind_k = (p.position - verts[0]).dot(nk) <= scale;
-                            let all_behind_p =
-                                verts.iter().all(|v| (*v - p.position).dot(p.normal) <= scale);
+                            let all_behind_p = verts
+                                .iter()
+                                .all(|v| (*v - p.position).dot(p.normal) <= scale);
                             behind_k || all_behind_p
                         } else {
                             (c - p.position).dot(p.normal) + rad <= 0.0
@@ -171,6 +175,7 @@ impl AssemblyPlan {
             .map(|d| used[d].then(|| build_table(&disc, &ladder, d)))
             .collect();
         Self {
+            self_rule: Arc::new(super::integrate::SelfRules::new(opts.self_order)),
             disc,
             opts,
             ladder,
@@ -218,7 +223,12 @@ impl AssemblyPlan {
 
     /// An integrator with this plan's options over its mesh.
     pub fn integrator(&self) -> ElementIntegrator<'_> {
-        ElementIntegrator::new(self.disc.mesh(), &self.ladder, self.opts.clone())
+        ElementIntegrator::with_self_rule(
+            self.disc.mesh(),
+            &self.ladder,
+            self.opts.clone(),
+            self.self_rule.clone(),
+        )
     }
 
     /// Fills the row block of element `kp`: `block` holds its f_r rows of the
@@ -256,7 +266,7 @@ impl AssemblyPlan {
                         }
                     }
                 }
-                CLASS_NEAR | CLASS_SELF => {
+                CLASS_NEAR | CLASS_SELF if mode != FillMode::FarOnly => {
                     for ke in k..end {
                         for (row, p) in pts.iter().enumerate() {
                             let out = &mut block[row * ncols + ke * f..row * ncols + (ke + 1) * f];
@@ -270,7 +280,10 @@ impl AssemblyPlan {
                         }
                     }
                 }
-                code if mode == FillMode::All => {
+                code if code != CLASS_NEAR
+                    && code != CLASS_SELF
+                    && mode != FillMode::SpecialOnly =>
+                {
                     let t = self.tables[(code - 1) as usize]
                         .as_ref()
                         .expect("plan builds every table it uses");
@@ -337,13 +350,25 @@ fn contract(g: &[f64], basis_t: &[f64], nq: usize, f: usize, out: &mut [f64]) {
 fn contract_fixed<const F: usize>(g: &[f64], basis_t: &[f64], nq: usize, out: &mut [f64]) {
     let basis_t = &basis_t[..nq * F];
     for (ge, oe) in g.chunks_exact(nq).zip(out.chunks_exact_mut(F)) {
-        let mut acc = [0.0f64; F];
-        for (gq, bq) in ge.iter().zip(basis_t.chunks_exact(F)) {
-            for j in 0..F {
-                acc[j] += gq * bq[j];
+        // Four independent accumulators hide the latency of the additions.
+        let mut acc = [[0.0f64; F]; 4];
+        let mut gc = ge.chunks_exact(4);
+        let mut bc = basis_t.chunks_exact(4 * F);
+        for (g4, b4) in (&mut gc).zip(&mut bc) {
+            for u in 0..4 {
+                for j in 0..F {
+                    acc[u][j] += g4[u] * b4[u * F + j];
+                }
             }
         }
-        oe.copy_from_slice(&acc);
+        for (gq, bq) in gc.remainder().iter().zip(bc.remainder().chunks_exact(F)) {
+            for j in 0..F {
+                acc[0][j] += gq * bq[j];
+            }
+        }
+        for j in 0..F {
+            oe[j] = (acc[0][j] + acc[1][j]) + (acc[2][j] + acc[3][j]);
+        }
     }
 }
 
@@ -395,18 +420,21 @@ fn build_table(disc: &Discretization, ladder: &RuleLadder, d: usize) -> FarTable
     let per_elem: Vec<[f64; 7]> = (0..n)
         .into_par_iter()
         .flat_map_iter(|k| {
-            rule.points.iter().zip(&rule.weights).map(move |(&[s, t], &w)| {
-                let q = mesh.point(k, s, t);
-                [
-                    q.position.x,
-                    q.position.y,
-                    q.position.z,
-                    q.normal.x,
-                    q.normal.y,
-                    q.normal.z,
-                    w * q.jacobian * std::f64::consts::FRAC_1_PI,
-                ]
-            })
+            rule.points
+                .iter()
+                .zip(&rule.weights)
+                .map(move |(&[s, t], &w)| {
+                    let q = mesh.point(k, s, t);
+                    [
+                        q.position.x,
+                        q.position.y,
+                        q.position.z,
+                        q.normal.x,
+                        q.normal.y,
+                        q.normal.z,
+                        w * q.jacobian * std::f64::consts::FRAC_1_PI,
+                    ]
+                })
         })
         .collect();
     let col = |c: usize| per_elem.iter().map(|v| v[c]).collect::<Vec<f64>>();

@@ -20,7 +20,10 @@ fn octahedron_faces() -> Vec<(String, [DVec3; 3])> {
                     [a, c, b]
                 };
                 let sign = |v: f64| if v > 0.0 { '+' } else { '-' };
-                faces.push((format!("octant {}x{}y{}z", sign(sx), sign(sy), sign(sz)), tri));
+                faces.push((
+                    format!("octant {}x{}y{}z", sign(sx), sign(sy), sign(sz)),
+                    tri,
+                ));
             }
         }
     }
@@ -66,12 +69,30 @@ pub fn box_room(lx: f64, ly: f64, lz: f64) -> Surface {
     let p = |x: f64, y: f64, z: f64| DVec3::new(x * lx, y * ly, z * lz);
     // Each wall as a quad (a, b, c, d) in counter-clockwise order seen from inside.
     let walls: [(&str, [DVec3; 4]); 6] = [
-        ("floor z=0", [p(0., 0., 0.), p(1., 0., 0.), p(1., 1., 0.), p(0., 1., 0.)]),
-        ("ceiling z=lz", [p(0., 0., 1.), p(0., 1., 1.), p(1., 1., 1.), p(1., 0., 1.)]),
-        ("wall y=0", [p(0., 0., 0.), p(0., 0., 1.), p(1., 0., 1.), p(1., 0., 0.)]),
-        ("wall y=ly", [p(0., 1., 0.), p(1., 1., 0.), p(1., 1., 1.), p(0., 1., 1.)]),
-        ("wall x=0", [p(0., 0., 0.), p(0., 1., 0.), p(0., 1., 1.), p(0., 0., 1.)]),
-        ("wall x=lx", [p(1., 0., 0.), p(1., 0., 1.), p(1., 1., 1.), p(1., 1., 0.)]),
+        (
+            "floor z=0",
+            [p(0., 0., 0.), p(1., 0., 0.), p(1., 1., 0.), p(0., 1., 0.)],
+        ),
+        (
+            "ceiling z=lz",
+            [p(0., 0., 1.), p(0., 1., 1.), p(1., 1., 1.), p(1., 0., 1.)],
+        ),
+        (
+            "wall y=0",
+            [p(0., 0., 0.), p(0., 0., 1.), p(1., 0., 1.), p(1., 0., 0.)],
+        ),
+        (
+            "wall y=ly",
+            [p(0., 1., 0.), p(1., 1., 0.), p(1., 1., 1.), p(0., 1., 1.)],
+        ),
+        (
+            "wall x=0",
+            [p(0., 0., 0.), p(0., 1., 0.), p(0., 1., 1.), p(0., 0., 1.)],
+        ),
+        (
+            "wall x=lx",
+            [p(1., 0., 0.), p(1., 0., 1.), p(1., 1., 1.), p(1., 1., 0.)],
+        ),
     ];
     let map = Arc::new(Identity);
     Surface {
@@ -101,7 +122,11 @@ mod tests {
                 let (fa, fb, fc) = (p.map.map(*a), p.map.map(*b), p.map.map(*c));
                 let n = (fb - fa).cross(fc - fa);
                 let mid = (fa + fb + fc) / 3.0;
-                assert!(n.dot(centre - mid) > 0.0, "{}: normal points outward", p.name);
+                assert!(
+                    n.dot(centre - mid) > 0.0,
+                    "{}: normal points outward",
+                    p.name
+                );
             }
         }
     }

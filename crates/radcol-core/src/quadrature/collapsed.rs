@@ -1,7 +1,7 @@
 //! Conical-product (collapsed Gauss) rules on σ of any degree: Gauss–Legendre in
 //! both directions of the Duffy map (x, y) ↦ (x, (1 - x) y). Positive weights,
-//! interior points, exact to the requested degree; used beyond the degrees the
-//! symmetric tables cover and for integrands that need a collapse at a vertex.
+//! interior points, exact to the requested degree; used where no cheaper
+//! symmetric rule exists (the node weights, and the ladder's fallback).
 
 use super::gauss::gauss_legendre01;
 use super::TriangleRule;
@@ -29,19 +29,6 @@ pub fn collapsed_rule(degree: usize) -> TriangleRule {
         points,
         weights,
     }
-}
-
-/// A tensor rule on the unit square for integrands collapsed at a vertex:
-/// `n × n` Gauss–Legendre points (u, v) in [0,1]² with weights summing to 1.
-pub fn square_rule(n: usize) -> Vec<([f64; 2], f64)> {
-    let (x, w) = gauss_legendre01(n);
-    let mut out = Vec::with_capacity(n * n);
-    for i in 0..n {
-        for j in 0..n {
-            out.push(([x[i], x[j]], w[i] * w[j]));
-        }
-    }
-    out
 }
 
 #[cfg(test)]

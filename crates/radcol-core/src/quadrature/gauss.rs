@@ -70,7 +70,10 @@ mod tests {
                 let fact = |m: usize| (1..=m).map(|v| v as f64).product::<f64>();
                 let err = fact(n).powi(4) / ((2 * n + 1) as f64 * fact(2 * n).powi(2));
                 let got = 1.0 / (k as f64 + 1.0) - q;
-                assert!((got - err).abs() < 1e-3 * err + 2e-16, "n={n}: {got} vs {err}");
+                assert!(
+                    (got - err).abs() < 1e-3 * err + 2e-16,
+                    "n={n}: {got} vs {err}"
+                );
             }
             assert!(x.windows(2).all(|p| p[0] < p[1]) && x[0] > 0.0 && x[n - 1] < 1.0);
         }

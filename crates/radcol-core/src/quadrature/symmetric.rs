@@ -10,11 +10,11 @@
 //!
 //! # Why symmetric rules
 //!
-//! For a given degree, fully symmetric rules are the cheapest known PI rules on
-//! the triangle (79 points for degree 20 against 121 for the 11 × 11 conical
-//! product), and because the point set does not depend on how the vertices of a
-//! mesh triangle are numbered, the quadrature error does not either — the
-//! assembled matrices keep the symmetries of the mesh.
+//! For a given degree, fully symmetric rules are among the cheapest known PI
+//! rules on the triangle (79 points for degree 20 against 121 for the 11 × 11
+//! conical product), and because the point set does not depend on how the
+//! vertices of a mesh triangle are numbered, the quadrature error does not
+//! either — the assembled matrices keep the symmetries of the mesh.
 //!
 //! # Source
 //!
@@ -22,12 +22,12 @@
 //! efficient quadrature rules in two and higher dimensions", *Computers &
 //! Mathematics with Applications* **59**(2) (2010) 663–676,
 //! doi:10.1016/j.camwa.2009.10.027. Their triangle rules are fully symmetric
-//! with positive weights and interior nodes for every degree. The numbers (16–17
-//! significant digits, i.e. the IEEE doubles of the distributed tables, also
-//! distributed by J. Burkardt as TRIANGLE_SYMQ_RULE) were transcribed from the
-//! Xiao–Gimbutas tables in FEniCS/basix, `cpp/basix/quadrature.cpp`
-//! (`make_xiao_gimbutas_quadrature`), and are stored here in our own orbit form
-//! in `symmetric_data.rs`; see that file for the layout.
+//! with positive weights and interior nodes for every degree. Their tables are
+//! distributed in machine-readable form by J. Burkardt (TRIANGLE_SYMQ_RULE); the
+//! numbers here (16–17 significant digits: the IEEE doubles of the tables) were
+//! transcribed from the copy in FEniCS/basix, `cpp/basix/quadrature.cpp`
+//! (`make_xiao_gimbutas_quadrature`, MIT licence), and are stored in our own
+//! orbit form in `symmetric_data.rs`; see that file for the layout.
 //!
 //! Point counts, degrees 1–30: 1, 3, 6, 6, 7, 12, 15, 16, 19, 25, 28, 33, 37,
 //! 42, 49, 55, 60, 67, 73, 79, 87, 96, 103, 112, 120, 130, 141, 150, 159, 171.
@@ -52,8 +52,9 @@
 //! checked once offline in 50-digit arithmetic: every table's moment equations
 //! (all monomials of degree ≤ its degree) have full column rank in the orbit
 //! parameters, so each rule is locally unique, and the minimum-norm Newton
-//! correction towards the exact rule is below 1.5e-16 in every orbit
-//! coordinate and weight — the stored doubles are the exact rules rounded.
+//! correction towards the exact rule is at most 2.1e-16 in any orbit
+//! coordinate or weight (a few ulps) — the stored doubles are the exact rules
+//! to within the accuracy of the published tables.
 
 #[path = "symmetric_data.rs"]
 mod symmetric_data;

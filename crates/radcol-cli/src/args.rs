@@ -1,0 +1,187 @@
+//! Layer 1: the command line as clap sees it. Plain strings and numbers only;
+//! turning them into core types (and rejecting bad values) is `config.rs`'s job.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+const SCENES: &str = "sphere (unit sphere), sphere:R, ellipsoid:A,B,C, box:LX,LY,LZ \
+(the room [0,LX]x[0,LY]x[0,LZ]); cornell and FILE.obj are accepted but not yet supported";
+
+/// Collocation for the radiosity equation u - (ρ/π) ∫ G u = E on curved and
+/// polyhedral surfaces (Atkinson-Chien collocation with Micula's α0 nodes).
+#[derive(Debug, Parser)]
+#[command(name = "radcol", version, propagate_version = true)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Solve on one refinement level and report mesh, assembly, timings, solution integrals and errors.
+    Solve(SolveArgs),
+    /// Solve on levels A..=B against an exact u and report errors with their convergence orders.
+    Study(StudyArgs),
+    /// Print the collocation nodes and weights of degree r on the unit triangle, and α0.
+    Nodes(NodesArgs),
+    /// Describe a scene's mesh at a level: elements, h, shape ratios, area, unknowns, memory.
+    Info(InfoArgs),
+}
+
+/// Which linear solver.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum SolverArg {
+    /// Restarted GMRES (tolerance --tol).
+    Gmres,
+    /// Dense LU factorisation (needs a second N×N matrix).
+    Lu,
+}
+
+/// Which assembly backend.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BackendArg {
+    /// rayon on all cores, f64.
+    Cpu,
+    /// wgpu compute shaders (not built yet).
+    Gpu,
+    /// The GPU when one is available, else the CPU (currently always the CPU).
+    Auto,
+}
+
+/// The problem and discretization options shared by `solve` and `study`.
+#[derive(Debug, Args)]
+pub struct ProblemArgs {
+    /// The surface.
+    #[arg(value_name = "SCENE", long_help = format!("The surface: {SCENES}."))]
+    pub scene: String,
+
+    /// Polynomial degree r of the collocation space, 0..=6.
+    #[arg(long, short = 'r', value_name = "R", default_value_t = 1)]
+    pub degree: usize,
+
+    /// Node parameter α in (0, 1/3), or `auto`: α0 when it exists (odd r), else the α
+    /// minimising the degree-(r+1) defect of the node rule (see `radcol nodes`).
+    #[arg(long, value_name = "A|auto", default_value = "auto")]
+    pub alpha: String,
+
+    /// Reflectivity ρ: a number or an expression in x, y, z; must lie in [0, 1) at every node.
+    #[arg(
+        long,
+        value_name = "EXPR",
+        default_value = "0.5",
+        allow_hyphen_values = true
+    )]
+    pub rho: String,
+
+    /// Emission E: a number or an expression in x, y, z [default: 1 without --exact;
+    /// with --exact, E is manufactured as u - K u with an accurate reference quadrature].
+    #[arg(long, value_name = "EXPR", allow_hyphen_values = true)]
+    pub emission: Option<String>,
+
+    /// Exact solution u (an expression in x, y, z), to measure errors [default: none].
+    #[arg(long, value_name = "EXPR", allow_hyphen_values = true)]
+    pub exact: Option<String>,
+
+    /// Linear solver.
+    #[arg(long, value_enum, default_value_t = SolverArg::Gmres)]
+    pub solver: SolverArg,
+
+    /// GMRES relative residual tolerance, in (0, 1).
+    #[arg(long, value_name = "T", default_value = "1e-12")]
+    pub tol: f64,
+
+    /// GMRES restart length (Krylov dimension), >= 1.
+    #[arg(long, value_name = "M", default_value_t = 60)]
+    pub restart: usize,
+
+    /// GMRES iteration limit, >= 1.
+    #[arg(long, value_name = "N", default_value_t = 2000)]
+    pub max_iters: usize,
+
+    /// Target relative error of each element integral, in (0, 1).
+    #[arg(long, value_name = "Q", default_value = "1e-12")]
+    pub quad_tol: f64,
+
+    /// Assembly backend (`auto` currently means cpu).
+    #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
+    pub backend: BackendArg,
+
+    /// Print one JSON object instead of the text report.
+    #[arg(long)]
+    pub json: bool,
+
+    /// Overwrite existing output files.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// `radcol solve`.
+#[derive(Debug, Args)]
+pub struct SolveArgs {
+    #[command(flatten)]
+    pub problem: ProblemArgs,
+
+    /// Refinement level: each level splits every triangle into 4 (8 elements at level 0 on
+    /// a sphere or ellipsoid, 12 on a box).
+    #[arg(long, short = 'l', value_name = "L", default_value_t = 2)]
+    pub level: u32,
+
+    /// Write the nodal solution as CSV (element,node,x,y,z,u per collocation node)
+    /// [default: none]; refuses to overwrite without --force.
+    #[arg(long, value_name = "FILE.csv")]
+    pub out: Option<PathBuf>,
+}
+
+/// `radcol study`.
+#[derive(Debug, Args)]
+pub struct StudyArgs {
+    #[command(flatten)]
+    pub problem: ProblemArgs,
+
+    /// Refinement levels A..B (inclusive; A..=B also accepted), e.g. 0..3.
+    #[arg(long, value_name = "A..B", required = true)]
+    pub levels: String,
+
+    /// Draw error vs h and error vs time as an SVG log-log plot [default: none];
+    /// refuses to overwrite without --force.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
+}
+
+/// `radcol nodes`.
+#[derive(Debug, Args)]
+pub struct NodesArgs {
+    /// Polynomial degree r, 0..=6.
+    #[arg(long, short = 'r', value_name = "R", default_value_t = 1)]
+    pub degree: usize,
+
+    /// Node parameter α in (0, 1/3), or `auto` (α0 when it exists, else the best α).
+    #[arg(long, value_name = "A|auto", default_value = "auto")]
+    pub alpha: String,
+
+    /// Print one JSON object instead of the text report.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `radcol info`.
+#[derive(Debug, Args)]
+pub struct InfoArgs {
+    /// The surface.
+    #[arg(value_name = "SCENE", long_help = format!("The surface: {SCENES}."))]
+    pub scene: String,
+
+    /// Polynomial degree r, 0..=6 (for the unknowns and memory estimate).
+    #[arg(long, short = 'r', value_name = "R", default_value_t = 1)]
+    pub degree: usize,
+
+    /// Refinement level.
+    #[arg(long, short = 'l', value_name = "L", default_value_t = 2)]
+    pub level: u32,
+
+    /// Print one JSON object instead of the text report.
+    #[arg(long)]
+    pub json: bool,
+}

@@ -1,0 +1,344 @@
+//! A hand-written SVG of a study: two log-log panels (error vs h, error vs total
+//! time), three series each (nodes max, global max, L²), decade ticks, a legend.
+
+use radcol_core::study::StudyRow;
+use std::fmt::Write as _;
+
+const WIDTH: f64 = 960.0;
+const HEIGHT: f64 = 520.0;
+const PANEL_W: f64 = 360.0;
+const PANEL_H: f64 = 330.0;
+const PANEL_TOP: f64 = 70.0;
+const PANEL_LEFT: [f64; 2] = [90.0, 570.0];
+
+struct Series {
+    name: &'static str,
+    color: &'static str,
+    marker: Marker,
+    value: fn(&StudyRow) -> f64,
+}
+
+#[derive(Clone, Copy)]
+enum Marker {
+    Circle,
+    Square,
+    Triangle,
+}
+
+const SERIES: [Series; 3] = [
+    Series {
+        name: "nodes max",
+        color: "#1f77b4",
+        marker: Marker::Circle,
+        value: |r| r.nodes_max,
+    },
+    Series {
+        name: "global max",
+        color: "#d62728",
+        marker: Marker::Square,
+        value: |r| r.global_max,
+    },
+    Series {
+        name: "L2",
+        color: "#2ca02c",
+        marker: Marker::Triangle,
+        value: |r| r.l2,
+    },
+];
+
+/// A log10 axis spanning whole decades.
+#[derive(Clone, Copy, Debug)]
+struct LogAxis {
+    lo: i32,
+    hi: i32,
+}
+
+impl LogAxis {
+    /// The smallest decade range holding every positive finite value (1..10 if none).
+    fn covering(values: impl Iterator<Item = f64>) -> Self {
+        let (mut min, mut max) = (f64::INFINITY, f64::NEG_INFINITY);
+        for v in values.filter(|v| v.is_finite() && *v > 0.0) {
+            min = min.min(v);
+            max = max.max(v);
+        }
+        if !min.is_finite() {
+            return Self { lo: 0, hi: 1 };
+        }
+        let lo = min.log10().floor() as i32;
+        let mut hi = max.log10().ceil() as i32;
+        if hi <= lo {
+            hi = lo + 1;
+        }
+        Self { lo, hi }
+    }
+
+    /// Position of `v` in [0, 1] along the axis.
+    fn frac(&self, v: f64) -> f64 {
+        (v.log10() - self.lo as f64) / (self.hi - self.lo) as f64
+    }
+
+    /// Label every `step`-th decade so that at most about 8 labels show.
+    fn label_step(&self) -> i32 {
+        ((self.hi - self.lo) + 7) / 8
+    }
+}
+
+fn escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// `10^k` as SVG text with a superscript exponent.
+fn decade_label(k: i32) -> String {
+    format!("10<tspan dy=\"-7\" font-size=\"10\">{k}</tspan>")
+}
+
+fn marker(svg: &mut String, m: Marker, x: f64, y: f64, color: &str) {
+    let _ = match m {
+        Marker::Circle => writeln!(
+            svg,
+            r#"<circle cx="{x:.2}" cy="{y:.2}" r="4" fill="{color}"/>"#
+        ),
+        Marker::Square => writeln!(
+            svg,
+            r#"<rect x="{:.2}" y="{:.2}" width="8" height="8" fill="{color}"/>"#,
+            x - 4.0,
+            y - 4.0
+        ),
+        Marker::Triangle => writeln!(
+            svg,
+            r#"<polygon points="{:.2},{:.2} {:.2},{:.2} {:.2},{:.2}" fill="{color}"/>"#,
+            x,
+            y - 5.0,
+            x - 5.0,
+            y + 4.0,
+            x + 5.0,
+            y + 4.0
+        ),
+    };
+}
+
+/// One panel: frame, ticks, labels, and the three series against `x_of`.
+fn panel(
+    svg: &mut String,
+    left: f64,
+    rows: &[StudyRow],
+    x_of: fn(&StudyRow) -> f64,
+    x_label: &str,
+    y: LogAxis,
+) {
+    let x = LogAxis::covering(rows.iter().map(x_of));
+    let top = PANEL_TOP;
+    let bottom = top + PANEL_H;
+    let px = |v: f64| left + x.frac(v) * PANEL_W;
+    let py = |v: f64| bottom - y.frac(v) * PANEL_H;
+
+    let _ = writeln!(
+        svg,
+        r##"<rect x="{left}" y="{top}" width="{PANEL_W}" height="{PANEL_H}" fill="#ffffff" stroke="#333333"/>"##
+    );
+    // Decade grid lines, ticks and labels; minor ticks at 2..9 × 10^k.
+    for (axis, horizontal) in [(x, true), (y, false)] {
+        let step = axis.label_step();
+        for k in axis.lo..=axis.hi {
+            let f = (k - axis.lo) as f64 / (axis.hi - axis.lo) as f64;
+            let labelled = (k - axis.lo) % step == 0;
+            if horizontal {
+                let xp = left + f * PANEL_W;
+                let _ = writeln!(
+                    svg,
+                    r##"<line x1="{xp:.2}" y1="{top}" x2="{xp:.2}" y2="{bottom}" stroke="#e4e4e4"/>"##
+                );
+                let _ = writeln!(
+                    svg,
+                    r##"<line x1="{xp:.2}" y1="{bottom}" x2="{xp:.2}" y2="{:.2}" stroke="#333333"/>"##,
+                    bottom + 6.0
+                );
+                if labelled {
+                    let _ = writeln!(
+                        svg,
+                        r#"<text x="{xp:.2}" y="{:.2}" text-anchor="middle">{}</text>"#,
+                        bottom + 22.0,
+                        decade_label(k)
+                    );
+                }
+            } else {
+                let yp = bottom - f * PANEL_H;
+                let _ = writeln!(
+                    svg,
+                    r##"<line x1="{left}" y1="{yp:.2}" x2="{:.2}" y2="{yp:.2}" stroke="#e4e4e4"/>"##,
+                    left + PANEL_W
+                );
+                let _ = writeln!(
+                    svg,
+                    r##"<line x1="{:.2}" y1="{yp:.2}" x2="{left}" y2="{yp:.2}" stroke="#333333"/>"##,
+                    left - 6.0
+                );
+                if labelled {
+                    let _ = writeln!(
+                        svg,
+                        r#"<text x="{:.2}" y="{:.2}" text-anchor="end">{}</text>"#,
+                        left - 9.0,
+                        yp + 4.0,
+                        decade_label(k)
+                    );
+                }
+            }
+            if k < axis.hi {
+                for m in 2..=9 {
+                    let g = f + (m as f64).log10() / (axis.hi - axis.lo) as f64;
+                    if horizontal {
+                        let xp = left + g * PANEL_W;
+                        let _ = writeln!(
+                            svg,
+                            r##"<line x1="{xp:.2}" y1="{bottom}" x2="{xp:.2}" y2="{:.2}" stroke="#333333"/>"##,
+                            bottom + 3.0
+                        );
+                    } else {
+                        let yp = bottom - g * PANEL_H;
+                        let _ = writeln!(
+                            svg,
+                            r##"<line x1="{:.2}" y1="{yp:.2}" x2="{left}" y2="{yp:.2}" stroke="#333333"/>"##,
+                            left - 3.0
+                        );
+                    }
+                }
+            }
+        }
+    }
+    let _ = writeln!(
+        svg,
+        r#"<text x="{:.2}" y="{:.2}" text-anchor="middle" font-size="14">{}</text>"#,
+        left + PANEL_W / 2.0,
+        bottom + 46.0,
+        escape(x_label)
+    );
+    let _ = writeln!(
+        svg,
+        r#"<text x="{:.2}" y="{:.2}" text-anchor="middle" font-size="14" transform="rotate(-90 {:.2} {:.2})">error</text>"#,
+        left - 58.0,
+        top + PANEL_H / 2.0,
+        left - 58.0,
+        top + PANEL_H / 2.0
+    );
+    for s in &SERIES {
+        let pts: Vec<(f64, f64)> = rows
+            .iter()
+            .map(|r| (x_of(r), (s.value)(r)))
+            .filter(|(a, b)| a.is_finite() && *a > 0.0 && b.is_finite() && *b > 0.0)
+            .map(|(a, b)| (px(a), py(b)))
+            .collect();
+        if pts.len() > 1 {
+            let path: Vec<String> = pts.iter().map(|(a, b)| format!("{a:.2},{b:.2}")).collect();
+            let _ = writeln!(
+                svg,
+                r#"<polyline points="{}" fill="none" stroke="{}" stroke-width="1.8"/>"#,
+                path.join(" "),
+                s.color
+            );
+        }
+        for &(a, b) in &pts {
+            marker(svg, s.marker, a, b, s.color);
+        }
+    }
+}
+
+/// The SVG document for `rows`, titled `title`.
+pub fn study_svg(rows: &[StudyRow], title: &str) -> String {
+    let y = LogAxis::covering(
+        rows.iter()
+            .flat_map(|r| SERIES.iter().map(move |s| (s.value)(r))),
+    );
+    let mut svg = String::new();
+    let _ = writeln!(
+        svg,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{HEIGHT}" viewBox="0 0 {WIDTH} {HEIGHT}" font-family="sans-serif" font-size="12">"#
+    );
+    let _ = writeln!(
+        svg,
+        r##"<rect width="100%" height="100%" fill="#ffffff"/>"##
+    );
+    let _ = writeln!(
+        svg,
+        r#"<text x="{:.1}" y="32" text-anchor="middle" font-size="17">{}</text>"#,
+        WIDTH / 2.0,
+        escape(title)
+    );
+    panel(&mut svg, PANEL_LEFT[0], rows, |r| r.h, "mesh size h", y);
+    panel(
+        &mut svg,
+        PANEL_LEFT[1],
+        rows,
+        |r| r.total_s,
+        "total time per level (s)",
+        y,
+    );
+    // Legend, centred under both panels.
+    let legend_y = HEIGHT - 28.0;
+    let mut lx = WIDTH / 2.0 - 210.0;
+    for s in &SERIES {
+        let _ = writeln!(
+            svg,
+            r#"<line x1="{lx:.1}" y1="{legend_y}" x2="{:.1}" y2="{legend_y}" stroke="{}" stroke-width="1.8"/>"#,
+            lx + 36.0,
+            s.color
+        );
+        marker(&mut svg, s.marker, lx + 18.0, legend_y, s.color);
+        let _ = writeln!(
+            svg,
+            r#"<text x="{:.1}" y="{:.1}">{}</text>"#,
+            lx + 44.0,
+            legend_y + 4.0,
+            s.name
+        );
+        lx += 150.0;
+    }
+    svg.push_str("</svg>\n");
+    svg
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(level: u32, h: f64, e: f64) -> StudyRow {
+        StudyRow {
+            level,
+            elements: 8,
+            unknowns: 24,
+            h,
+            nodes_max: e,
+            global_max: 3.0 * e,
+            l2: 2.0 * e,
+            eoc_nodes: None,
+            eoc_global: None,
+            eoc_l2: None,
+            assembly_s: 0.01,
+            solve_s: 0.001,
+            total_s: 0.02 * (level + 1) as f64,
+            iterations: 5,
+            kernel_evals: 1000,
+        }
+    }
+
+    #[test]
+    fn axis_covers_whole_decades() {
+        let a = LogAxis::covering([3e-5, 0.2].into_iter());
+        assert_eq!((a.lo, a.hi), (-5, 0));
+        let b = LogAxis::covering([0.5, 0.5].into_iter());
+        assert_eq!((b.lo, b.hi), (-1, 0));
+        assert!((a.frac(1e-5) - 0.0).abs() < 1e-12 && (a.frac(1.0) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn svg_has_both_panels_three_series_and_a_legend() {
+        let rows = vec![row(0, 1.0, 1e-2), row(1, 0.5, 1e-3), row(2, 0.25, 1e-4)];
+        let svg = study_svg(&rows, "sphere <r = 1>");
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+        assert_eq!(svg.matches("<polyline").count(), 6);
+        assert!(svg.contains("nodes max") && svg.contains("global max") && svg.contains(">L2<"));
+        assert!(svg.contains("sphere &lt;r = 1&gt;"));
+    }
+}

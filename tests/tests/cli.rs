@@ -1,0 +1,518 @@
+//! End-to-end tests of the `radcol` binary: JSON contracts, CSV output, the
+//! overwrite rule, studies, node sets, and one-line errors with exit codes.
+//!
+//! This crate does not depend on radcol-cli, so `CARGO_BIN_EXE_radcol` is not
+//! set: the binary is found next to the test executable's profile directory
+//! (`target/<profile>/radcol`, the test lives in `target/<profile>/deps/`) and
+//! built with `cargo build -p radcol-cli` in the same profile first, which is a
+//! no-op when it is up to date and keeps the tests from running a stale binary.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::OnceLock;
+
+fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("tests/ lives in the workspace root")
+        .to_path_buf()
+}
+
+/// `target/<profile>/radcol`, built (or refreshed) once per test run.
+fn radcol_bin() -> &'static Path {
+    static BIN: OnceLock<PathBuf> = OnceLock::new();
+    BIN.get_or_init(|| {
+        let exe = std::env::current_exe().expect("test executable path");
+        let deps = exe.parent().expect("target/<profile>/deps");
+        let profile_dir = if deps.file_name().is_some_and(|n| n == "deps") {
+            deps.parent().expect("target/<profile>")
+        } else {
+            deps
+        };
+        let bin = profile_dir.join(format!("radcol{}", std::env::consts::EXE_SUFFIX));
+        let profile =
+            profile_dir
+                .file_name()
+                .and_then(|n| n.to_str())
+                .unwrap_or(if cfg!(debug_assertions) {
+                    "debug"
+                } else {
+                    "release"
+                });
+        let profile = match profile {
+            "debug" => "dev",
+            other => other,
+        };
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let mut cmd = Command::new(cargo);
+        cmd.arg("build")
+            .arg("--quiet")
+            .arg("-p")
+            .arg("radcol-cli")
+            .arg("--profile")
+            .arg(profile)
+            .arg("--manifest-path")
+            .arg(workspace_root().join("Cargo.toml"));
+        if let Some(target_dir) = profile_dir.parent() {
+            cmd.arg("--target-dir").arg(target_dir);
+        }
+        let status = cmd.status();
+        match status {
+            Ok(s) if s.success() => {}
+            // Offline machines or a cargo that cannot run: use what is there.
+            _ if bin.exists() => {
+                eprintln!("note: could not rebuild radcol, testing {}", bin.display())
+            }
+            other => panic!(
+                "building radcol failed ({other:?}) and {} does not exist",
+                bin.display()
+            ),
+        }
+        bin
+    })
+}
+
+fn radcol(args: &[&str]) -> Output {
+    Command::new(radcol_bin())
+        .args(args)
+        .output()
+        .expect("radcol runs")
+}
+
+fn stdout_json(out: &Output) -> Value {
+    assert!(
+        out.status.success(),
+        "radcol failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!(
+            "stdout is not JSON ({e}):\n{}",
+            String::from_utf8_lossy(&out.stdout)
+        )
+    })
+}
+
+/// The run failed with exit code `code` and exactly one `error: ...` line on stderr,
+/// containing every one of `needles`; returns the line.
+fn assert_one_line_error(args: &[&str], code: i32, needles: &[&str]) -> String {
+    let out = radcol(args);
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert_eq!(
+        out.status.code(),
+        Some(code),
+        "radcol {args:?}: stderr {stderr:?}"
+    );
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(
+        lines.len(),
+        1,
+        "radcol {args:?}: expected one line, got {stderr:?}"
+    );
+    assert!(
+        lines[0].starts_with("error: "),
+        "radcol {args:?}: {stderr:?}"
+    );
+    assert!(!stderr.contains("panicked"), "radcol {args:?}: {stderr:?}");
+    assert!(!stderr.contains("backtrace"), "radcol {args:?}: {stderr:?}");
+    for n in needles {
+        assert!(
+            stderr.to_lowercase().contains(&n.to_lowercase()),
+            "radcol {args:?}: {stderr:?} should mention {n:?}"
+        );
+    }
+    lines[0].to_string()
+}
+
+/// A fresh scratch directory under the target directory.
+fn scratch(name: &str) -> PathBuf {
+    let dir = radcol_bin()
+        .parent()
+        .expect("profile dir")
+        .join("cli-test-scratch")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    dir
+}
+
+fn num(v: &Value, key: &str) -> f64 {
+    v[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} should be a number in {v}"))
+}
+
+#[test]
+fn solve_json_has_every_contract_key() {
+    let v = stdout_json(&radcol(&["solve", "sphere", "--level", "1", "--json"]));
+    for key in [
+        "scene", "degree", "alpha", "level", "elements", "unknowns", "h",
+    ] {
+        assert!(!v[key].is_null(), "missing {key} in {v}");
+    }
+    assert_eq!(v["scene"], "sphere");
+    assert_eq!(v["degree"], 1);
+    assert_eq!(v["level"], 1);
+    assert_eq!(v["elements"], 32);
+    assert_eq!(v["unknowns"], 96);
+    assert!((num(&v, "alpha") - 1.0 / 6.0).abs() < 1e-15);
+    for key in ["kind", "device", "precision"] {
+        assert!(v["backend"][key].is_string(), "backend.{key} in {v}");
+    }
+    assert_eq!(v["backend"]["kind"], "cpu");
+    assert_eq!(v["solver"]["kind"], "gmres");
+    assert!(v["solver"]["iterations"].is_u64());
+    assert!(num(&v["solver"], "residual") < 1e-10);
+    for key in ["mesh_s", "assembly_s", "solve_s", "total_s"] {
+        assert!(num(&v["timings"], key) >= 0.0, "timings.{key}");
+    }
+    for key in [
+        "kernel_evals",
+        "pairs_far",
+        "pairs_near",
+        "pairs_self",
+        "pairs_culled",
+    ] {
+        assert!(v["assembly"][key].is_u64(), "assembly.{key} in {v}");
+    }
+    assert!(v["assembly"]["kernel_evals"].as_u64().unwrap() > 0);
+    let channels = v["channels"].as_array().expect("channels array");
+    assert_eq!(channels.len(), 1);
+    let ch = &channels[0];
+    assert_eq!(ch["name"], "u");
+    assert!(ch["integral_u"].is_f64() && ch["integral_e"].is_f64());
+    assert!(ch["errors"].is_null(), "no exact solution: errors null");
+    // Unit sphere, ρ = 1/2, E = 1: u = 2 and ∫u = 8π (G ≡ 1/4).
+    assert!((num(ch, "integral_u") - 8.0 * std::f64::consts::PI).abs() < 0.1);
+}
+
+#[test]
+fn solve_with_exact_solution_reports_small_errors() {
+    let v = stdout_json(&radcol(&[
+        "solve", "sphere", "--degree", "1", "--level", "1", "--rho", "0.5", "--exact", "x*y+z",
+        "--json",
+    ]));
+    let e = &v["channels"][0]["errors"];
+    assert!(e.is_object(), "errors should be present: {v}");
+    let (nodes, global, l2) = (num(e, "nodes_max"), num(e, "global_max"), num(e, "l2"));
+    assert!(nodes < 1e-8, "nodes_max {nodes}");
+    assert!(global < 0.5 && l2 < 0.5, "global {global}, l2 {l2}");
+    assert!(
+        nodes <= global,
+        "the nodes are points of S: {nodes} > {global}"
+    );
+}
+
+#[test]
+fn solve_writes_csv_and_refuses_to_overwrite() {
+    let dir = scratch("csv");
+    let path = dir.join("u.csv");
+    let p = path.to_str().unwrap();
+    let out = radcol(&["solve", "sphere", "--level", "1", "--out", p]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("element,node,x,y,z,u"));
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), 96, "one row per collocation node");
+    for row in &rows {
+        let fields: Vec<&str> = row.split(',').collect();
+        assert_eq!(fields.len(), 6, "{row}");
+        let u: f64 = fields[5].parse().unwrap();
+        assert!(
+            (u - 2.0).abs() < 1e-6,
+            "u = 2 on the unit sphere with ρ = 1/2, E = 1: {row}"
+        );
+        let (x, y, z): (f64, f64, f64) = (
+            fields[2].parse().unwrap(),
+            fields[3].parse().unwrap(),
+            fields[4].parse().unwrap(),
+        );
+        assert!(
+            ((x * x + y * y + z * z).sqrt() - 1.0).abs() < 1e-12,
+            "node on the sphere: {row}"
+        );
+    }
+
+    let before = std::fs::read(&path).unwrap();
+    assert_one_line_error(
+        &["solve", "sphere", "--level", "0", "--out", p],
+        2,
+        &["exists", "--force"],
+    );
+    assert_eq!(
+        std::fs::read(&path).unwrap(),
+        before,
+        "refused write must not touch the file"
+    );
+
+    let out = radcol(&["solve", "sphere", "--level", "0", "--out", p, "--force"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        std::fs::read_to_string(&path).unwrap().lines().count(),
+        1 + 24
+    );
+
+    let txt = dir.join("u.txt");
+    assert_one_line_error(
+        &[
+            "solve",
+            "sphere",
+            "--level",
+            "0",
+            "--out",
+            txt.to_str().unwrap(),
+        ],
+        2,
+        &["only .csv output for now"],
+    );
+    assert!(!txt.exists());
+}
+
+#[test]
+fn study_json_has_rows_with_eoc_and_fitted_orders() {
+    let dir = scratch("study");
+    let svg = dir.join("conv.svg");
+    let v = stdout_json(&radcol(&[
+        "study",
+        "sphere",
+        "--degree",
+        "1",
+        "--levels",
+        "0..2",
+        "--exact",
+        "x*y+z",
+        "--json",
+        "--plot",
+        svg.to_str().unwrap(),
+    ]));
+    let rows = v["rows"].as_array().expect("rows");
+    assert_eq!(rows.len(), 3);
+    for (i, row) in rows.iter().enumerate() {
+        assert_eq!(row["level"], i as u64);
+        for key in [
+            "elements",
+            "unknowns",
+            "h",
+            "nodes_max",
+            "global_max",
+            "l2",
+            "assembly_s",
+            "solve_s",
+        ] {
+            assert!(!row[key].is_null(), "row {i} lacks {key}");
+        }
+    }
+    for key in ["eoc_nodes", "eoc_global", "eoc_l2"] {
+        assert!(rows[0][key].is_null(), "first row {key} must be null");
+        assert!(rows[2][key].is_f64(), "last row {key} must be a number");
+    }
+    // Interpolation of x*y + z by linear pieces: the global error falls like h^2.
+    let g = num(&v["fitted"], "global_max");
+    assert!(g > 1.0 && g < 3.0, "fitted global order {g}");
+    assert!(v["fitted"]["l2"].is_f64() && v["fitted"].get("nodes_max").is_some());
+
+    let text = std::fs::read_to_string(&svg).expect("plot written");
+    assert!(text.starts_with("<svg") && text.trim_end().ends_with("</svg>"));
+    assert!(text.contains("nodes max") && text.contains("global max"));
+    assert_one_line_error(
+        &[
+            "study",
+            "sphere",
+            "--levels",
+            "0..0",
+            "--exact",
+            "z",
+            "--plot",
+            svg.to_str().unwrap(),
+        ],
+        2,
+        &["exists"],
+    );
+}
+
+#[test]
+fn study_text_prints_table_and_theory() {
+    let out = radcol(&[
+        "study", "sphere", "--degree", "0", "--levels", "0..=1", "--exact", "1+z",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("eoc_nodes") && text.contains("fitted orders"),
+        "{text}"
+    );
+    assert!(text.contains("theory"), "{text}");
+}
+
+#[test]
+fn study_requires_exact_and_valid_levels() {
+    assert_one_line_error(&["study", "sphere", "--levels", "0..1"], 2, &["--exact"]);
+    assert_one_line_error(
+        &["study", "sphere", "--levels", "2..1", "--exact", "z"],
+        2,
+        &["--levels"],
+    );
+    assert_one_line_error(
+        &["study", "sphere", "--levels", "a..2", "--exact", "z"],
+        2,
+        &["--levels"],
+    );
+}
+
+#[test]
+fn nodes_degree_one_gives_alpha0_one_sixth() {
+    let v = stdout_json(&radcol(&["nodes", "--degree", "1", "--json"]));
+    let a0 = num(&v, "alpha0");
+    assert!((a0 - 1.0 / 6.0).abs() < 1e-15, "alpha0 = {a0}");
+    assert_eq!(v["degree"], 1);
+    assert_eq!(v["precision"], 2);
+    assert!(v["alpha0_reason"].as_str().is_some_and(|s| !s.is_empty()));
+    let nodes = v["nodes"].as_array().unwrap();
+    assert_eq!(nodes.len(), 3);
+    let sum: f64 = nodes.iter().map(|n| num(n, "weight")).sum();
+    assert!(
+        (sum - 0.5).abs() < 1e-14,
+        "weights sum to the area of σ: {sum}"
+    );
+    for n in nodes {
+        for key in ["i", "j", "s", "t", "weight"] {
+            assert!(!n[key].is_null(), "node lacks {key}: {n}");
+        }
+    }
+    // Even degree: no α0, with a reason.
+    let v = stdout_json(&radcol(&["nodes", "--degree", "2", "--json"]));
+    assert!(v["alpha0"].is_null());
+    assert!(v["alpha0_reason"].as_str().is_some_and(|s| !s.is_empty()));
+}
+
+#[test]
+fn info_reports_mesh_and_memory() {
+    let v = stdout_json(&radcol(&[
+        "info",
+        "box:1,2,3",
+        "--level",
+        "1",
+        "--degree",
+        "2",
+        "--json",
+    ]));
+    assert_eq!(v["elements"], 48);
+    assert_eq!(v["base_triangles"], 12);
+    assert_eq!(v["patches"], 6);
+    assert_eq!(v["unknowns"], 48 * 6);
+    assert!((num(&v, "area") - 22.0).abs() < 1e-12);
+    assert_eq!(v["convex_enclosure"], true);
+    let out = radcol(&["info", "sphere"]);
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stdout).contains("visibility not needed"));
+}
+
+#[test]
+fn help_documents_defaults() {
+    let out = radcol(&["solve", "--help"]);
+    assert!(out.status.success());
+    let help = String::from_utf8_lossy(&out.stdout);
+    for d in [
+        "[default: 1]",
+        "[default: auto]",
+        "[default: 2]",
+        "[default: 0.5]",
+        "[default: gmres]",
+        "[default: 1e-12]",
+    ] {
+        assert!(help.contains(d), "solve --help lacks {d}");
+    }
+}
+
+#[test]
+fn bad_input_gives_one_line_and_exit_code_two() {
+    assert_one_line_error(
+        &["solve", "sphere", "--level", "0", "--rho", "x**"],
+        2,
+        &["--rho", "x**"],
+    );
+    assert_one_line_error(
+        &["solve", "sphere", "--level", "0", "--exact", "foo"],
+        2,
+        &["foo"],
+    );
+    assert_one_line_error(
+        &["solve", "sphere", "--level", "0", "--rho", "1.5"],
+        2,
+        &["1.5", "[0, 1)"],
+    );
+    assert_one_line_error(
+        &["solve", "torus"],
+        2,
+        &["torus", "sphere:R", "box:LX,LY,LZ"],
+    );
+    assert_one_line_error(&["solve", "box:1,2"], 2, &["box:1,2"]);
+    assert_one_line_error(&["solve", "sphere:-1"], 2, &["> 0"]);
+    assert_one_line_error(&["solve", "cornell"], 2, &["not yet supported", "cornell"]);
+    assert_one_line_error(
+        &["solve", "room.obj"],
+        2,
+        &["not yet supported", "room.obj"],
+    );
+    assert_one_line_error(
+        &["solve", "sphere", "--level", "12", "--degree", "6"],
+        2,
+        &["GiB"],
+    );
+    assert_one_line_error(
+        &["solve", "sphere", "--level", "7", "--degree", "6"],
+        2,
+        &["GiB"],
+    );
+    assert_one_line_error(
+        &["solve", "sphere", "--backend", "gpu"],
+        2,
+        &["GPU backend is not built yet"],
+    );
+    assert_one_line_error(&["solve", "sphere", "--degree", "7"], 2, &["0..=6"]);
+    assert_one_line_error(&["solve", "sphere", "--alpha", "0.4"], 2, &["1/3"]);
+    assert_one_line_error(&["solve", "sphere", "--tol", "0"], 2, &["--tol"]);
+    assert_one_line_error(
+        &["solve", "sphere", "--no-such-flag"],
+        2,
+        &["--no-such-flag"],
+    );
+    assert_one_line_error(&["solve", "sphere", "--backend", "tpu"], 2, &["tpu"]);
+    assert_one_line_error(&[], 2, &["command"]);
+}
+
+#[test]
+fn solver_failure_exits_with_one() {
+    // One GMRES step cannot resolve a varying emission on the box: not bad input,
+    // so exit code 1 (still one line).
+    assert_one_line_error(
+        &[
+            "solve",
+            "box:1,1,1",
+            "--level",
+            "1",
+            "--emission",
+            "exp(x)",
+            "--restart",
+            "1",
+            "--max-iters",
+            "1",
+        ],
+        1,
+        &["not converged"],
+    );
+}
