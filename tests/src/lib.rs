@@ -1,5 +1,6 @@
 //! Shared helpers for radcol's cross-crate tests.
 
+use radcol_core::alpha0::auto_alpha;
 use radcol_core::assembly::CpuBackend;
 use radcol_core::problem::Problem;
 use radcol_core::run::SolveConfig;
@@ -37,4 +38,36 @@ pub fn orders(
         o[0], o[1], o[2]
     );
     (rows, o)
+}
+
+/// Runs a study of `problem` at degree `r` (α = auto) over `levels` and checks
+/// the theory: fitted global order within 0.3 of r + 1 (eq. 23); fitted node
+/// order at least r + 3 - 0.3 for odd r at α0 (36), r + 2 - 0.3 for even r (39)
+/// (lower bounds: on closed surfaces the leading node term largely cancels).
+pub fn assert_orders(
+    label: &str,
+    problem: &Problem,
+    r: usize,
+    levels: std::ops::RangeInclusive<u32>,
+) {
+    let cfg = SolveConfig {
+        degree: r,
+        alpha: auto_alpha(r),
+        ..Default::default()
+    };
+    println!("{label} r = {r}, alpha = {}", cfg.alpha);
+    let (rows, [nodes, global, _l2]) = orders(problem, &cfg, levels);
+    let theory_global = (r + 1) as f64;
+    assert!(
+        (global - theory_global).abs() <= 0.3,
+        "{label} r = {r}: fitted global order {global:.3}, theory {theory_global}"
+    );
+    let theory_nodes = if r % 2 == 1 { r + 3 } else { r + 2 } as f64;
+    assert!(
+        nodes >= theory_nodes - 0.3,
+        "{label} r = {r}: fitted node order {nodes:.3} below theory {theory_nodes}"
+    );
+    // Superconvergence (24): the node error is far below the global error.
+    let last = rows.last().expect("at least one level");
+    assert!(last.nodes_max < 1e-2 * last.global_max);
 }

@@ -12,11 +12,9 @@
 //! higher, so they are checked as lower bounds; global orders are checked within
 //! 0.3 of r + 1 over three levels in the asymptotic range.
 
-use radcol_core::alpha0::auto_alpha;
 use radcol_core::geometry::shapes::sphere;
 use radcol_core::problem::{Field, Problem};
-use radcol_core::run::SolveConfig;
-use radcol_tests::orders;
+use radcol_tests::assert_orders;
 use std::sync::Arc;
 
 fn sphere_problem() -> Problem {
@@ -37,26 +35,7 @@ fn sphere_problem() -> Problem {
 }
 
 fn check(r: usize, levels: std::ops::RangeInclusive<u32>) {
-    let cfg = SolveConfig {
-        degree: r,
-        alpha: auto_alpha(r),
-        ..Default::default()
-    };
-    println!("sphere r = {r}, alpha = {}", cfg.alpha);
-    let (rows, [nodes, global, _l2]) = orders(&sphere_problem(), &cfg, levels);
-    let theory_global = (r + 1) as f64;
-    assert!(
-        (global - theory_global).abs() <= 0.3,
-        "r = {r}: fitted global order {global:.3}, theory {theory_global}"
-    );
-    let theory_nodes = if r % 2 == 1 { r + 3 } else { r + 2 } as f64;
-    assert!(
-        nodes >= theory_nodes - 0.3,
-        "r = {r}: fitted node order {nodes:.3} below theory {theory_nodes}"
-    );
-    // Superconvergence (24): the node error is far below the global error.
-    let last = rows.last().unwrap();
-    assert!(last.nodes_max < 1e-2 * last.global_max);
+    assert_orders("sphere", &sphere_problem(), r, levels);
 }
 
 #[test]

@@ -114,7 +114,7 @@ pub fn find_alpha0(r: usize) -> Alpha0Report {
         .map(|s| s.precision())
         .unwrap_or(r);
 
-    let (alpha0, reason) = if r % 2 == 0 {
+    let (alpha0, reason) = if r.is_multiple_of(2) {
         (
             None,
             format!(

@@ -316,7 +316,8 @@ pub fn far_degree(
     poly_degree: usize,
     curved: bool,
 ) -> Option<usize> {
-    if !(dist > radius * 1.0001) {
+    // (NaN distances fall through to None as well.)
+    if dist.partial_cmp(&(radius * 1.0001)) != Some(std::cmp::Ordering::Greater) {
         return None;
     }
     let eta = radius / (2.0 * dist);

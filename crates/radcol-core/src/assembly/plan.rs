@@ -246,7 +246,8 @@ impl AssemblyPlan {
             nodes.eval_basis(st[0], st[1], out)
         };
         let r = nodes.degree();
-        let mut g = vec![0.0f64; RUN_CHUNK * self.ladder.rule(MAX_RULE_DEGREE).len()];
+        let max_nq = self.tables.iter().flatten().map(|t| t.nq).max().unwrap_or(0);
+        let mut g = vec![0.0f64; RUN_CHUNK * max_nq];
         let mut evals = 0u64;
         let mut k = 0;
         while k < n {
@@ -259,13 +260,12 @@ impl AssemblyPlan {
                 end += 1;
             }
             match class {
-                CLASS_CULLED => {
-                    if mode == FillMode::All {
-                        for row in 0..f {
-                            block[row * ncols + k * f..row * ncols + end * f].fill(0.0);
-                        }
+                CLASS_CULLED if mode == FillMode::All => {
+                    for row in 0..f {
+                        block[row * ncols + k * f..row * ncols + end * f].fill(0.0);
                     }
                 }
+                CLASS_CULLED => {}
                 CLASS_NEAR | CLASS_SELF if mode != FillMode::FarOnly => {
                     for ke in k..end {
                         for (row, p) in pts.iter().enumerate() {
