@@ -479,9 +479,9 @@ fn bad_input_gives_one_line_and_exit_code_two() {
         &["GiB"],
     );
     assert_one_line_error(
-        &["solve", "sphere", "--backend", "gpu"],
+        &["solve", "sphere", "--backend", "cpu", "--precision", "f32"],
         2,
-        &["GPU backend is not built yet"],
+        &["f64 only"],
     );
     assert_one_line_error(&["solve", "sphere", "--degree", "7"], 2, &["0..=6"]);
     assert_one_line_error(&["solve", "sphere", "--alpha", "0.4"], 2, &["1/3"]);

@@ -44,10 +44,23 @@ pub enum SolverArg {
 pub enum BackendArg {
     /// rayon on all cores, f64.
     Cpu,
-    /// wgpu compute shaders (not built yet).
+    /// wgpu compute shaders on the best adapter (software ones such as lavapipe
+    /// included); an error when there is none.
     Gpu,
-    /// The GPU when one is available, else the CPU (currently always the CPU).
+    /// A hardware GPU adapter when one exists (and offers f64 when f64 is
+    /// asked for), else the CPU; the report says which was used.
     Auto,
+}
+
+/// Arithmetic precision on the GPU.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum PrecisionArg {
+    /// f64 when the adapter offers SHADER_F64, else f32.
+    Auto,
+    /// f64 on the device.
+    F64,
+    /// f32 on the device (results widened to f64).
+    F32,
 }
 
 /// The problem and discretization options shared by `solve` and `study`.
@@ -104,9 +117,13 @@ pub struct ProblemArgs {
     #[arg(long, value_name = "Q", default_value = "1e-12")]
     pub quad_tol: f64,
 
-    /// Assembly backend (`auto` currently means cpu).
+    /// Assembly backend.
     #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
     pub backend: BackendArg,
+
+    /// GPU arithmetic precision (the CPU backend is always f64).
+    #[arg(long, value_enum, default_value_t = PrecisionArg::Auto)]
+    pub precision: PrecisionArg,
 
     /// Print one JSON object instead of the text report.
     #[arg(long)]

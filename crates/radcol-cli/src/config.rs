@@ -2,7 +2,8 @@
 //! that can be rejected without solving is rejected here, before any work.
 
 use crate::args::{
-    BackendArg, Cli, Command, InfoArgs, NodesArgs, ProblemArgs, SolveArgs, SolverArg, StudyArgs,
+    BackendArg, Cli, Command, InfoArgs, NodesArgs, PrecisionArg, ProblemArgs, SolveArgs, SolverArg,
+    StudyArgs,
 };
 use crate::error::{bad_input, BadInput};
 use crate::scene::SceneSpec;
@@ -144,14 +145,26 @@ impl fmt::Debug for Backend {
     }
 }
 
-/// The one place that turns `--backend` into an assembly backend (the GPU crate
-/// plugs in here).
-pub fn make_backend(choice: BackendArg) -> Result<Box<dyn AssemblyBackend>, BadInput> {
+/// The one place that turns `--backend` and `--precision` into an assembly
+/// backend. `cpu` never touches wgpu.
+pub fn make_backend(
+    choice: BackendArg,
+    precision: PrecisionArg,
+) -> Result<Box<dyn AssemblyBackend>, BadInput> {
+    let precision = match precision {
+        PrecisionArg::Auto => radcol_gpu::Precision::Auto,
+        PrecisionArg::F64 => radcol_gpu::Precision::F64,
+        PrecisionArg::F32 => radcol_gpu::Precision::F32,
+    };
     match choice {
-        BackendArg::Cpu | BackendArg::Auto => Ok(Box::new(CpuBackend)),
-        BackendArg::Gpu => Err(bad_input(
-            "the GPU backend is not built yet: use --backend cpu (or auto)",
+        BackendArg::Cpu if precision == radcol_gpu::Precision::F32 => Err(bad_input(
+            "the CPU backend computes in f64 only; --precision f32 needs --backend gpu",
         )),
+        BackendArg::Cpu => Ok(Box::new(CpuBackend)),
+        BackendArg::Gpu => radcol_gpu::backend_from_name("gpu", Some(precision))
+            .map_err(|e| bad_input(format!("--backend gpu: {e}"))),
+        BackendArg::Auto => radcol_gpu::backend_from_name("auto", Some(precision))
+            .map_err(|e| bad_input(format!("--backend auto: {e}"))),
     }
 }
 
@@ -268,7 +281,7 @@ fn setup(p: &ProblemArgs, level: u32, max_level: u32) -> Result<Setup> {
         .transpose()?;
     let backend = Backend {
         requested: p.backend,
-        imp: make_backend(p.backend)?,
+        imp: make_backend(p.backend, p.precision)?,
     };
     check_size(&surface, degree, max_level, solver)?;
 
@@ -479,8 +492,14 @@ mod tests {
     }
 
     #[test]
-    fn gpu_backend_is_refused_until_built() {
-        assert!(make_backend(BackendArg::Gpu).is_err());
-        assert_eq!(make_backend(BackendArg::Auto).unwrap().info().kind, "cpu");
+    fn cpu_backend_is_f64_only() {
+        assert_eq!(
+            make_backend(BackendArg::Cpu, PrecisionArg::Auto)
+                .unwrap()
+                .info()
+                .precision,
+            "f64"
+        );
+        assert!(make_backend(BackendArg::Cpu, PrecisionArg::F32).is_err());
     }
 }

@@ -9,6 +9,7 @@
 //! [`AssemblyBackend`] executes the plan ([`CpuBackend`] here, the GPU backend in
 //! `radcol-gpu`).
 
+pub mod conformance;
 pub mod cpu;
 pub mod integrate;
 pub mod plan;

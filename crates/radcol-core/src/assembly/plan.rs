@@ -246,7 +246,13 @@ impl AssemblyPlan {
             nodes.eval_basis(st[0], st[1], out)
         };
         let r = nodes.degree();
-        let max_nq = self.tables.iter().flatten().map(|t| t.nq).max().unwrap_or(0);
+        let max_nq = self
+            .tables
+            .iter()
+            .flatten()
+            .map(|t| t.nq)
+            .max()
+            .unwrap_or(0);
         let mut g = vec![0.0f64; RUN_CHUNK * max_nq];
         let mut evals = 0u64;
         let mut k = 0;

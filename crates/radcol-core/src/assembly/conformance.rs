@@ -1,0 +1,198 @@
+//! The assembly conformance suite: cases and comparisons every backend must
+//! pass against the [`CpuBackend`] (style item 8: one suite, many backends).
+//!
+//! A GPU crate runs [`check_backend`] on its backend; core runs it on an
+//! independent slow path ([`generic_matrix`]) that evaluates every far pair
+//! point by point through [`ElementIntegrator::apply_rule`] and
+//! [`crate::kernel::g`] instead of the vectorised run loop.
+
+use super::plan::{CLASS_CULLED, CLASS_NEAR, CLASS_SELF};
+use super::{AssemblyBackend, AssemblyPlan, CpuBackend, FieldPoint, QuadratureOptions};
+use crate::discretization::Discretization;
+use crate::geometry::shapes::{box_room, ellipsoid, sphere};
+use crate::geometry::Surface;
+use crate::matrix::DenseMatrix;
+use crate::mesh::Mesh;
+use crate::nodes::NodeSet;
+use rayon::prelude::*;
+use std::sync::Arc;
+
+fn plan(surface: Surface, r: usize, level: u32) -> AssemblyPlan {
+    let mesh = Arc::new(Mesh::new(Arc::new(surface), level));
+    let disc = Arc::new(Discretization::new(
+        mesh,
+        NodeSet::new(r, 0.1).expect("0.1 is a valid alpha"),
+    ));
+    AssemblyPlan::new(disc, QuadratureOptions::default())
+}
+
+/// The conformance cases: sphere, ellipsoid (1, 1.5, 0.8) and box room
+/// (1, 2, 1.5) at r = 0..=3, α = 0.1, on small levels.
+pub fn conformance_cases() -> Vec<(String, AssemblyPlan)> {
+    let mut out = Vec::new();
+    for r in 0..=3usize {
+        let (ls, le, lb) = if r <= 1 { (2, 1, 2) } else { (1, 1, 1) };
+        out.push((format!("sphere r={r} level={ls}"), plan(sphere(1.0), r, ls)));
+        out.push((
+            format!("ellipsoid r={r} level={le}"),
+            plan(ellipsoid(1.0, 1.5, 0.8), r, le),
+        ));
+        out.push((
+            format!("box r={r} level={lb}"),
+            plan(box_room(1.0, 2.0, 1.5), r, lb),
+        ));
+    }
+    out
+}
+
+/// Largest differences found by [`compare_matrices`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MatrixDiff {
+    /// max |got - want| / |want| over entries with want ≠ 0.
+    pub entry_rel: f64,
+    /// max |got - want| / max(|want|, row_floor · row max).
+    pub floored_rel: f64,
+}
+
+/// Checks |got - want| ≤ tol · max(|want|, row_floor · max_j |want_ij|) for every
+/// entry. The floor exists because an entry is a sum Σ_q G_q w_q l_j(q) whose
+/// terms have both signs: one that nearly cancels carries the rounding of its
+/// row-sized terms. On failure the message names row, column, both values, the
+/// difference and the tolerance.
+pub fn compare_matrices(
+    got: &DenseMatrix,
+    want: &DenseMatrix,
+    tol: f64,
+    row_floor: f64,
+) -> Result<MatrixDiff, String> {
+    if (got.nrows(), got.ncols()) != (want.nrows(), want.ncols()) {
+        return Err(format!(
+            "shape {}×{} differs from {}×{}",
+            got.nrows(),
+            got.ncols(),
+            want.nrows(),
+            want.ncols()
+        ));
+    }
+    let mut d = MatrixDiff::default();
+    for i in 0..want.nrows() {
+        let (g, w) = (got.row(i), want.row(i));
+        let row_max = w.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        for (j, (&gj, &wj)) in g.iter().zip(w).enumerate() {
+            let diff = (gj - wj).abs();
+            if wj != 0.0 {
+                d.entry_rel = d.entry_rel.max(diff / wj.abs());
+            }
+            let scale = wj.abs().max(row_floor * row_max);
+            if scale > 0.0 {
+                d.floored_rel = d.floored_rel.max(diff / scale);
+            }
+            if !(diff <= tol * scale) {
+                return Err(format!(
+                    "entry ({i}, {j}): got {gj:.17e}, want {wj:.17e}, |diff| = {diff:.3e} > tol {:.3e}",
+                    tol * scale
+                ));
+            }
+        }
+    }
+    Ok(d)
+}
+
+/// Runs every conformance case on `backend` and compares with the CPU backend
+/// (matrices with [`compare_matrices`], and kernel evaluation counts).
+pub fn check_backend(
+    backend: &dyn AssemblyBackend,
+    tol: f64,
+    row_floor: f64,
+) -> Result<Vec<(String, MatrixDiff)>, String> {
+    let mut out = Vec::new();
+    for (name, p) in conformance_cases() {
+        let want = CpuBackend
+            .assemble(&p)
+            .map_err(|e| format!("{name}: cpu: {e}"))?;
+        let got = backend.assemble(&p).map_err(|e| format!("{name}: {e}"))?;
+        if got.kernel_evals != want.kernel_evals {
+            return Err(format!(
+                "{name}: {} kernel evaluations, the CPU backend made {}",
+                got.kernel_evals, want.kernel_evals
+            ));
+        }
+        let d = compare_matrices(&got.matrix, &want.matrix, tol, row_floor)
+            .map_err(|e| format!("{name}: {e}"))?;
+        out.push((name, d));
+    }
+    Ok(out)
+}
+
+/// The geometric matrix of `plan` by the slow generic path: every far pair
+/// point by point through [`ElementIntegrator::apply_rule`](super::ElementIntegrator::apply_rule),
+/// near and self pairs as the CPU backend does them.
+pub fn generic_matrix(plan: &AssemblyPlan) -> DenseMatrix {
+    let disc = plan.discretization();
+    let n = disc.mesh().len();
+    let f = disc.nodes_per_element();
+    let dim = plan.dim();
+    let mut m = DenseMatrix::zeros(dim, dim);
+    if dim == 0 {
+        return m;
+    }
+    let nodes = disc.nodes();
+    let phi = |_k: usize, st: [f64; 2], _q: glam::DVec3, out: &mut [f64]| {
+        nodes.eval_basis(st[0], st[1], out)
+    };
+    m.as_mut_slice()
+        .par_chunks_exact_mut(dim)
+        .enumerate()
+        .for_each(|(i, row)| {
+            let integrator = plan.integrator();
+            let p = disc.points()[i];
+            let fp = FieldPoint {
+                position: p.position,
+                normal: p.normal,
+                on_element: Some((p.element, p.st)),
+            };
+            for k in 0..n {
+                let out = &mut row[k * f..(k + 1) * f];
+                match plan.classes()[p.element * n + k] {
+                    CLASS_CULLED => {}
+                    CLASS_NEAR | CLASS_SELF => {
+                        integrator.integrate(&fp, k, nodes.degree(), &phi, out);
+                    }
+                    code => {
+                        let rule = plan.ladder().rule((code - 1) as usize);
+                        let tri = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+                        integrator.apply_rule(&fp, k, tri, rule, &phi, out);
+                    }
+                }
+            }
+        });
+    m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The vectorised far loop (SoA runs, register contraction) agrees with the
+    /// point-by-point generic path on every conformance case.
+    #[test]
+    fn cpu_backend_matches_the_generic_path() {
+        for (name, p) in conformance_cases() {
+            let fast = CpuBackend.assemble(&p).unwrap().matrix;
+            let slow = generic_matrix(&p);
+            let d = compare_matrices(&fast, &slow, 1e-13, 1e-3)
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert!(d.floored_rel <= 1e-13, "{name}: {d:?}");
+        }
+    }
+
+    #[test]
+    fn comparison_names_the_entry_that_differs() {
+        let want = DenseMatrix::from_row_major(2, 2, vec![1.0, 2.0, 3.0, 4.0]);
+        let mut got = want.clone();
+        got.as_mut_slice()[3] = 4.0 + 1e-9;
+        let err = compare_matrices(&got, &want, 1e-13, 1e-3).unwrap_err();
+        assert!(err.contains("entry (1, 1)"), "{err}");
+        assert!(compare_matrices(&want, &want, 0.0, 0.0).is_ok());
+    }
+}

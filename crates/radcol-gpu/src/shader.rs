@@ -1,0 +1,45 @@
+//! WGSL sources (from `shaders/` at the workspace root) and the one-line
+//! preamble that picks the precision.
+
+use crate::Precision;
+
+/// A WGSL file of `shaders/`, compiled into the crate.
+#[derive(Clone, Copy, Debug)]
+pub struct ShaderFile {
+    /// File name within `shaders/`.
+    pub name: &'static str,
+    /// Entry point of its compute kernel.
+    pub entry_point: &'static str,
+    /// The source, without the precision preamble.
+    pub source: &'static str,
+}
+
+/// The far-field kernel.
+pub const FAR_FIELD: ShaderFile = ShaderFile {
+    name: "far_field.wgsl",
+    entry_point: "far_field",
+    source: include_str!("../../../shaders/far_field.wgsl"),
+};
+
+/// Every shader the crate compiles (the tests check this lists all of `shaders/`).
+pub const SHADERS: &[ShaderFile] = &[FAR_FIELD];
+
+/// The precision preamble: the scalar alias every shader is written against.
+/// naga needs no `enable` directive for f64; the device needs
+/// [`wgpu::Features::SHADER_F64`].
+pub fn preamble(precision: Precision) -> &'static str {
+    match precision {
+        Precision::F32 => "alias scalar = f32;\n",
+        // Auto resolves before compiling; treat it as the wider type.
+        Precision::F64 | Precision::Auto => "alias scalar = f64;\n",
+    }
+}
+
+/// `file`'s source with the preamble of `precision` prepended: exactly what is
+/// handed to the device.
+pub fn source_for(file: &ShaderFile, precision: Precision) -> String {
+    let mut s = String::with_capacity(file.source.len() + 32);
+    s.push_str(preamble(precision));
+    s.push_str(file.source);
+    s
+}
