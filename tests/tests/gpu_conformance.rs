@@ -22,11 +22,9 @@
 //! through Q - P, i.e. about 2× per refinement level.
 
 use radcol_core::assembly::conformance::{check_backend, compare_matrices, MatrixDiff};
-use radcol_core::assembly::{
-    AssemblyBackend, AssemblyPlan, CpuBackend, FillMode, QuadratureOptions,
-};
+use radcol_core::assembly::{AssemblyBackend, AssemblyPlan, FillMode, QuadratureOptions};
 use radcol_core::discretization::Discretization;
-use radcol_core::geometry::shapes::{box_room, ellipsoid, sphere};
+use radcol_core::geometry::shapes::{box_room, sphere};
 use radcol_core::geometry::Surface;
 use radcol_core::matrix::DenseMatrix;
 use radcol_core::mesh::Mesh;

@@ -87,7 +87,8 @@ pub fn compare_matrices(
             if scale > 0.0 {
                 d.floored_rel = d.floored_rel.max(diff / scale);
             }
-            if !(diff <= tol * scale) {
+            // NaN differences fail too.
+            if diff > tol * scale || diff.is_nan() {
                 return Err(format!(
                     "entry ({i}, {j}): got {gj:.17e}, want {wj:.17e}, |diff| = {diff:.3e} > tol {:.3e}",
                     tol * scale
