@@ -2,9 +2,11 @@
 
 use radcol_core::alpha0::auto_alpha;
 use radcol_core::assembly::CpuBackend;
-use radcol_core::problem::Problem;
+use radcol_core::geometry::shapes::{box_room, ellipsoid, sphere};
+use radcol_core::problem::{Field, Problem};
 use radcol_core::run::SolveConfig;
 use radcol_core::study::{fitted_order, study, StudyRow};
+use std::sync::Arc;
 
 /// Asserts |got - want| ≤ tol, printing the label, index, both values, the
 /// difference and the tolerance when it fails.
@@ -70,4 +72,57 @@ pub fn assert_orders(
     // Superconvergence (24): the node error is far below the global error.
     let last = rows.last().expect("at least one level");
     assert!(last.nodes_max < 1e-2 * last.global_max);
+}
+
+/// The closed-form problem on the unit sphere: ρ = 0.5 + 0.2x, E = exp(a·P) with
+/// a = (0.3, 0.5, 0.8). G ≡ 1/4 gives ∫_S E = 4π sinh|a|/|a|, ∫_S ρ = 2π, so
+/// ∫_S u = 2∫E and u = E + 2ρ sinh|a|/|a| exactly.
+pub fn sphere_closed_form() -> Problem {
+    let mut p = Problem::new(
+        Arc::new(sphere(1.0)),
+        Field::parse("0.5 + 0.2*x").unwrap(),
+        Field::parse("exp(0.3*x + 0.5*y + 0.8*z)").unwrap(),
+    );
+    let a = (0.3f64 * 0.3 + 0.5 * 0.5 + 0.8 * 0.8).sqrt();
+    let c = 2.0 * a.sinh() / a;
+    p.exact = Some(
+        Field::parse(&format!(
+            "exp(0.3*x + 0.5*y + 0.8*z) + (0.5 + 0.2*x)*{c:.17e}"
+        ))
+        .unwrap(),
+    );
+    p
+}
+
+/// One small problem per built-in shape for solver and backend agreement:
+/// (name, problem, degree r, level), with ρ = 0.7 - 0.1z², E = 1 + xy.
+pub fn mixed_problems() -> Vec<(String, Problem, usize, u32)> {
+    [
+        (Arc::new(sphere(1.0)), 2usize, 1u32),
+        (Arc::new(ellipsoid(1.0, 1.5, 0.8)), 1, 2),
+        (Arc::new(box_room(1.0, 2.0, 1.5)), 3, 1),
+    ]
+    .into_iter()
+    .map(|(surface, r, level)| {
+        let name = surface.name.clone();
+        let problem = Problem::new(
+            surface,
+            Field::parse("0.7 - 0.1*z^2").unwrap(),
+            Field::parse("1 + x*y").unwrap(),
+        );
+        (name, problem, r, level)
+    })
+    .collect()
+}
+
+/// ‖a - b‖ / ‖b‖.
+pub fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
+    let num: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt();
+    let den: f64 = b.iter().map(|y| y * y).sum::<f64>().sqrt();
+    num / den
 }

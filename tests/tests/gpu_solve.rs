@@ -9,25 +9,11 @@
 
 use radcol_core::alpha0::auto_alpha;
 use radcol_core::assembly::{AssemblyBackend, CpuBackend};
-use radcol_core::geometry::shapes::{box_room, ellipsoid, sphere};
-use radcol_core::problem::{Field, Problem};
 use radcol_core::run::{solve, SolveConfig, SolverKind};
 use radcol_core::study::{fitted_order, study};
 use radcol_gpu::testing::test_context;
 use radcol_gpu::{GpuBackend, Precision};
-use radcol_tests::assert_close;
-use std::sync::Arc;
-
-fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
-    let num: f64 = a
-        .iter()
-        .zip(b)
-        .map(|(x, y)| (x - y) * (x - y))
-        .sum::<f64>()
-        .sqrt();
-    let den: f64 = b.iter().map(|y| y * y).sum::<f64>().sqrt();
-    num / den
-}
+use radcol_tests::{assert_close, mixed_problems, rel_diff, sphere_closed_form};
 
 #[test]
 fn gpu_solutions_match_the_cpu() {
@@ -39,18 +25,7 @@ fn gpu_solutions_match_the_cpu() {
         backends.push((GpuBackend::new(ctx.clone(), Precision::F64).unwrap(), 1e-12));
     }
     backends.push((GpuBackend::new(ctx, Precision::F32).unwrap(), 1e-5));
-    let cases = [
-        (Arc::new(sphere(1.0)), 2usize, 1u32),
-        (Arc::new(ellipsoid(1.0, 1.5, 0.8)), 1, 2),
-        (Arc::new(box_room(1.0, 2.0, 1.5)), 3, 1),
-    ];
-    for (surface, r, level) in cases {
-        let name = surface.name.clone();
-        let problem = Problem::new(
-            surface,
-            Field::parse("0.7 - 0.1*z^2").unwrap(),
-            Field::parse("1 + x*y").unwrap(),
-        );
+    for (name, problem, r, level) in mixed_problems() {
         let cfg = SolveConfig {
             degree: r,
             alpha: 0.12,
@@ -91,19 +66,7 @@ fn gpu_study_orders_match_the_cpu() {
         return;
     };
     let gpu = GpuBackend::new(ctx, Precision::Auto).unwrap();
-    let mut problem = Problem::new(
-        Arc::new(sphere(1.0)),
-        Field::parse("0.5 + 0.2*x").unwrap(),
-        Field::parse("exp(0.3*x + 0.5*y + 0.8*z)").unwrap(),
-    );
-    let a = (0.3f64 * 0.3 + 0.5 * 0.5 + 0.8 * 0.8).sqrt();
-    let c = 2.0 * a.sinh() / a;
-    problem.exact = Some(
-        Field::parse(&format!(
-            "exp(0.3*x + 0.5*y + 0.8*z) + (0.5 + 0.2*x)*{c:.17e}"
-        ))
-        .unwrap(),
-    );
+    let problem = sphere_closed_form();
     let cfg = SolveConfig {
         degree: 1,
         alpha: auto_alpha(1),

@@ -12,30 +12,10 @@
 //! higher, so they are checked as lower bounds; global orders are checked within
 //! 0.3 of r + 1 over three levels in the asymptotic range.
 
-use radcol_core::geometry::shapes::sphere;
-use radcol_core::problem::{Field, Problem};
-use radcol_tests::assert_orders;
-use std::sync::Arc;
-
-fn sphere_problem() -> Problem {
-    let mut p = Problem::new(
-        Arc::new(sphere(1.0)),
-        Field::parse("0.5 + 0.2*x").unwrap(),
-        Field::parse("exp(0.3*x + 0.5*y + 0.8*z)").unwrap(),
-    );
-    let a = (0.3f64 * 0.3 + 0.5 * 0.5 + 0.8 * 0.8).sqrt();
-    let c = 2.0 * a.sinh() / a;
-    p.exact = Some(
-        Field::parse(&format!(
-            "exp(0.3*x + 0.5*y + 0.8*z) + (0.5 + 0.2*x)*{c:.17e}"
-        ))
-        .unwrap(),
-    );
-    p
-}
+use radcol_tests::{assert_orders, sphere_closed_form};
 
 fn check(r: usize, levels: std::ops::RangeInclusive<u32>) {
-    assert_orders("sphere", &sphere_problem(), r, levels);
+    assert_orders("sphere", &sphere_closed_form(), r, levels);
 }
 
 #[test]
