@@ -27,6 +27,7 @@ use std::io::Write;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    ensure_runtime_dir();
     // A panic is a bug, but the user still gets one line and an exit code, not
     // a backtrace: the hook stays silent and the payload is reported below.
     std::panic::set_hook(Box::new(|_| {}));
@@ -49,6 +50,31 @@ fn main() -> ExitCode {
     let _ = std::io::stdout().flush();
     eprintln!("error: {}", error::one_line(&err));
     ExitCode::from(error::exit_code(&err))
+}
+
+/// Mesa's Vulkan drivers (probed by `--backend auto|gpu`) print "XDG_RUNTIME_DIR
+/// is invalid or not set" on stderr in headless sessions, which reads like one of
+/// our errors. Without the variable, point it at a private directory, as a login
+/// session would. Runs first in `main`, before any thread exists.
+fn ensure_runtime_dir() {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::fs::{DirBuilderExt, MetadataExt, PermissionsExt};
+        if std::env::var_os("XDG_RUNTIME_DIR").is_some() {
+            return;
+        }
+        let Ok(uid) = std::fs::metadata("/proc/self").map(|m| m.uid()) else {
+            return;
+        };
+        let dir = std::env::temp_dir().join(format!("radcol-runtime-{uid}"));
+        let _ = std::fs::DirBuilder::new().mode(0o700).create(&dir);
+        // Use it only if it is ours and private (it may predate this run).
+        if let Ok(meta) = std::fs::symlink_metadata(&dir) {
+            if meta.is_dir() && meta.uid() == uid && meta.permissions().mode() & 0o077 == 0 {
+                std::env::set_var("XDG_RUNTIME_DIR", &dir);
+            }
+        }
+    }
 }
 
 fn try_main() -> anyhow::Result<()> {
