@@ -320,6 +320,7 @@ mod tests {
             total_s: 0.02 * (level + 1) as f64,
             iterations: 5,
             kernel_evals: 1000,
+            rounding_floor: 2.2e-13,
         }
     }
 

@@ -4,7 +4,7 @@ use crate::config::{Alpha, Setup};
 use radcol_core::alpha0::Alpha0Report;
 use radcol_core::nodes::NodeSet;
 use radcol_core::run::SolveOutcome;
-use radcol_core::study::{fitted_order, StudyRow};
+use radcol_core::study::{fitted_order_above_rounding, StudyRow};
 use serde_json::{json, Value};
 use std::io::{self, Write};
 
@@ -193,17 +193,10 @@ pub fn solve_json(s: &Setup, out: &SolveOutcome, csv: Option<&str>) -> Value {
     })
 }
 
-/// Fitted orders (least squares over all rows) of the three norms; None with
-/// fewer than two rows or a non-positive error.
+/// Fitted orders (least squares over the rows whose error lies above the
+/// rounding floor) of the three norms; None with fewer than two such rows.
 pub fn fitted(rows: &[StudyRow]) -> [(&'static str, Option<f64>); 3] {
-    let h: Vec<f64> = rows.iter().map(|r| r.h).collect();
-    let fit = |f: fn(&StudyRow) -> f64| {
-        let e: Vec<f64> = rows.iter().map(f).collect();
-        let usable = rows.len() >= 2 && e.iter().all(|v| v.is_finite() && *v > 0.0);
-        usable
-            .then(|| fitted_order(&h, &e))
-            .filter(|v| v.is_finite())
-    };
+    let fit = |f: fn(&StudyRow) -> f64| fitted_order_above_rounding(rows, f);
     [
         ("nodes_max", fit(|r| r.nodes_max)),
         ("global_max", fit(|r| r.global_max)),
@@ -325,7 +318,7 @@ pub fn study_footer(w: &mut dyn Write, rows: &[StudyRow], theory_text: &str) -> 
         .collect();
     writeln!(
         w,
-        "fitted orders (least squares over all levels): {}",
+        "fitted orders (least squares over the levels above rounding, 1000 ε max|u_n|): {}",
         parts.join(", ")
     )?;
     writeln!(w, "{theory_text}")
