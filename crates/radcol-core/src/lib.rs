@@ -32,6 +32,7 @@
 //! ```
 pub mod alpha0;
 pub mod assembly;
+pub mod camera;
 pub mod discretization;
 pub mod error;
 pub mod expr;
@@ -43,7 +44,10 @@ pub mod nodes;
 pub mod norms;
 pub mod problem;
 pub mod quadrature;
+pub mod render;
 pub mod run;
+pub mod scene;
 pub mod solution;
 pub mod solve;
 pub mod study;
+pub mod visibility;

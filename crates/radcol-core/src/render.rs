@@ -1,0 +1,1 @@
+//! Rendering and per-vertex read-back of solutions.

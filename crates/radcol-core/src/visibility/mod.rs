@@ -1,0 +1,1 @@
+//! Visibility V(P, Q) for scenes that can occlude.
