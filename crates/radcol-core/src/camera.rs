@@ -94,11 +94,19 @@ mod tests {
         // The centre ray looks at the target.
         let d = c.ray_direction(50.0, 50.0, 100, 100);
         assert!((d - DVec3::Z).length() < 1e-15);
-        assert!(Camera::parse("0,0,0,0,0,0,0,1,0,40").unwrap_err().contains("coincide"));
-        assert!(Camera::parse("0,0,-5,0,0,0,0,0,1,40").unwrap_err().contains("parallel"));
-        assert!(Camera::parse("0,0,-5,0,0,0,0,1,0,180").unwrap_err().contains("between"));
+        assert!(Camera::parse("0,0,0,0,0,0,0,1,0,40")
+            .unwrap_err()
+            .contains("coincide"));
+        assert!(Camera::parse("0,0,-5,0,0,0,0,0,1,40")
+            .unwrap_err()
+            .contains("parallel"));
+        assert!(Camera::parse("0,0,-5,0,0,0,0,1,0,180")
+            .unwrap_err()
+            .contains("between"));
         assert!(Camera::parse("1,2,3").unwrap_err().contains("10 numbers"));
-        assert!(Camera::parse("0,0,-5,0,0,0,0,1,0,x").unwrap_err().contains("'x'"));
+        assert!(Camera::parse("0,0,-5,0,0,0,0,1,0,x")
+            .unwrap_err()
+            .contains("'x'"));
     }
 
     /// Image x grows to the right of the view: with the eye on -z looking at +z
