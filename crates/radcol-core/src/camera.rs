@@ -48,10 +48,11 @@ impl Camera {
     /// the field of view lies in (0, 180) degrees.
     pub fn validate(&self) -> Result<(), String> {
         let fwd = self.target - self.eye;
-        if !(fwd.length() > 0.0) {
+        if fwd.length().is_nan() || fwd.length() <= 0.0 {
             return Err("camera: eye and target coincide".into());
         }
-        if !(fwd.normalize().cross(self.up).length() > 1e-9 * self.up.length()) {
+        let sine = fwd.normalize().cross(self.up).length();
+        if sine.is_nan() || sine <= 1e-9 * self.up.length() {
             return Err("camera: up is zero or parallel to the view direction".into());
         }
         if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 180.0) {

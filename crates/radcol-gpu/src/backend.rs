@@ -6,7 +6,7 @@ use crate::error::GpuError;
 use crate::far_field::fill_far_field;
 use crate::tiling::TileLimits;
 use crate::Precision;
-use radcol_core::assembly::plan::{CLASS_NEAR, CLASS_SELF};
+use radcol_core::assembly::plan::is_special;
 use radcol_core::assembly::{Assembled, AssemblyBackend, AssemblyPlan, BackendInfo, FillMode};
 use radcol_core::error::Error;
 use radcol_core::matrix::DenseMatrix;
@@ -137,14 +137,13 @@ struct Special {
     evals: u64,
 }
 
-/// Integrates every near and self pair on the CPU (rayon), with the plan's own
+/// Integrates every partial, near and self pair on the CPU (rayon), with the plan's own
 /// `fill_block(.., FillMode::SpecialOnly)` so the rules are the CPU backend's.
 fn special_pairs(plan: &AssemblyPlan) -> Special {
     let n = plan.discretization().mesh().len();
     let f = plan.discretization().nodes_per_element();
     let n_dim = plan.dim();
     let classes = plan.classes();
-    let is_special = |c: u8| c == CLASS_NEAR || c == CLASS_SELF;
     let kps: Vec<usize> = (0..n)
         .filter(|&kp| classes[kp * n..(kp + 1) * n].iter().any(|&c| is_special(c)))
         .collect();

@@ -151,6 +151,22 @@ impl<'a> ElementIntegrator<'a> {
         self.integrate_adaptive(p, k, tri, 0, poly_degree, phi, out)
     }
 
+    /// Adds the integral over the sub-triangle `tri` (in σ coordinates) of
+    /// element `k`, with the same far/near regimes as [`integrate`](Self::integrate)
+    /// (used for the visible pieces of partly hidden elements). Returns the
+    /// number of kernel evaluations.
+    pub fn integrate_region(
+        &self,
+        p: &FieldPoint,
+        k: usize,
+        tri: [[f64; 2]; 3],
+        poly_degree: usize,
+        phi: &Integrand<'_>,
+        out: &mut [f64],
+    ) -> u64 {
+        self.integrate_adaptive(p, k, tri, 0, poly_degree, phi, out)
+    }
+
     /// Applies `rule` on the sub-triangle `tri` (in σ coordinates) of element `k`.
     pub fn apply_rule(
         &self,

@@ -11,16 +11,29 @@
 use super::integrate::{far_degree, piece_ball, ElementIntegrator, FieldPoint, QuadratureOptions};
 use crate::discretization::Discretization;
 use crate::quadrature::{RuleLadder, MAX_RULE_DEGREE};
+use crate::visibility::{self, clip, Occluders, VisibilityAnalysis};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::sync::Arc;
 
 /// Class code: G = 0 on the whole pair (coplanar or back-facing).
 pub const CLASS_CULLED: u8 = 0;
+/// Class code: partly visible pair in a scene that can occlude (CPU): some
+/// triangle meets the hull of the two elements, or the element straddles the
+/// tangent plane of the block's element. Each row integrates over the exactly
+/// clipped visible part ([`clip::visible_region`]).
+pub const CLASS_PARTIAL: u8 = 253;
 /// Class code: near pair, adaptive subdivision (CPU).
 pub const CLASS_NEAR: u8 = 254;
 /// Class code: the collocation point lies on the element (curved elements), split at the point (CPU).
 pub const CLASS_SELF: u8 = 255;
+
+/// True for the classes a backend leaves to the CPU's [`AssemblyPlan::fill_block`]
+/// with [`FillMode::SpecialOnly`]: partial, near and self pairs.
+#[inline]
+pub fn is_special(code: u8) -> bool {
+    code >= CLASS_PARTIAL
+}
 
 /// Far-rule data of one degree for every element, structure-of-arrays.
 ///
@@ -65,6 +78,8 @@ pub struct PlanStats {
     pub pairs_self: u64,
     /// Pairs with G ≡ 0 (coplanar, back-facing), not integrated.
     pub pairs_culled: u64,
+    /// Pairs integrated over their clipped visible part (scenes that occlude).
+    pub pairs_partial: u64,
     /// Kernel evaluations of the far pairs: Σ rule points.
     pub far_kernel_evals: u64,
 }
@@ -74,7 +89,7 @@ pub struct PlanStats {
 pub enum FillMode {
     /// Every entry.
     All,
-    /// Only near and self pairs (what a GPU backend leaves to the CPU).
+    /// Only partial, near and self pairs (what a GPU backend leaves to the CPU).
     SpecialOnly,
     /// Only far pairs (for throughput measurements of the far-field kernel).
     FarOnly,
@@ -90,6 +105,29 @@ pub struct AssemblyPlan {
     classes: Vec<u8>,
     tables: Vec<Option<FarTable>>,
     stats: PlanStats,
+    visibility: VisibilityAnalysis,
+    occluders: Option<Occluders>,
+    partial: Vec<PartialRow>,
+}
+
+/// The partial pairs of one row block: elements (ascending) and their
+/// occluder candidates, flattened.
+#[derive(Debug, Default)]
+struct PartialRow {
+    elements: Vec<u32>,
+    ranges: Vec<(u32, u32)>,
+    candidates: Vec<u32>,
+}
+
+impl PartialRow {
+    fn candidates_of(&self, k: usize) -> &[u32] {
+        let i = self
+            .elements
+            .binary_search(&(k as u32))
+            .expect("every partial pair is listed");
+        let (start, len) = self.ranges[i];
+        &self.candidates[start as usize..(start + len) as usize]
+    }
 }
 
 impl AssemblyPlan {
@@ -116,13 +154,17 @@ impl AssemblyPlan {
             .collect();
         let pts = disc.points();
         let tol = opts.tol;
-        let classes: Vec<u8> = (0..n)
+        let visibility = visibility::analyze(mesh.surface());
+        let occluders = visibility
+            .needed
+            .then(|| Occluders::new(&visibility::base_triangles(mesh.surface())));
+        let rows: Vec<(Vec<u8>, PartialRow)> = (0..n)
             .into_par_iter()
-            .flat_map_iter(|kp| {
+            .map(|kp| {
                 let block = &pts[kp * f..(kp + 1) * f];
                 let balls = &balls;
                 let flat_geom = &flat_geom;
-                (0..n).map(move |k| {
+                let classify = |k: usize| {
                     let (c, rad, flat) = balls[k];
                     if k == kp {
                         return if flat { CLASS_CULLED } else { CLASS_SELF };
@@ -151,9 +193,40 @@ impl AssemblyPlan {
                         Some(d) => (d + 1) as u8,
                         None => CLASS_NEAR,
                     }
-                })
+                };
+                let mut row = Vec::with_capacity(n);
+                let mut partial = PartialRow::default();
+                let mut cands = Vec::new();
+                for k in 0..n {
+                    let mut code = classify(k);
+                    if let Some(occ) = &occluders {
+                        if code != CLASS_CULLED
+                            && code != CLASS_SELF
+                            && balls[kp].2
+                            && balls[k].2
+                            && partly_visible(occ, flat_geom[kp], flat_geom[k], &mut cands)
+                        {
+                            code = CLASS_PARTIAL;
+                            partial.elements.push(k as u32);
+                            partial
+                                .ranges
+                                .push((partial.candidates.len() as u32, cands.len() as u32));
+                            partial.candidates.extend_from_slice(&cands);
+                        }
+                    }
+                    row.push(code);
+                }
+                (row, partial)
             })
             .collect();
+        let mut classes = Vec::with_capacity(n * n);
+        let mut partial = Vec::with_capacity(if occluders.is_some() { n } else { 0 });
+        for (row, p) in rows {
+            classes.extend_from_slice(&row);
+            if occluders.is_some() {
+                partial.push(p);
+            }
+        }
 
         let ladder = RuleLadder::new();
         let mut used = [false; MAX_RULE_DEGREE + 1];
@@ -163,6 +236,7 @@ impl AssemblyPlan {
                 CLASS_CULLED => stats.pairs_culled += f as u64,
                 CLASS_NEAR => stats.pairs_near += f as u64,
                 CLASS_SELF => stats.pairs_self += f as u64,
+                CLASS_PARTIAL => stats.pairs_partial += f as u64,
                 d => {
                     let d = (d - 1) as usize;
                     used[d] = true;
@@ -182,7 +256,20 @@ impl AssemblyPlan {
             classes,
             tables,
             stats,
+            visibility,
+            occluders,
+            partial,
         }
+    }
+
+    /// Whether this plan models visibility, and why.
+    pub fn visibility(&self) -> &VisibilityAnalysis {
+        &self.visibility
+    }
+
+    /// The occluders, when the scene can occlude.
+    pub fn occluders(&self) -> Option<&Occluders> {
+        self.occluders.as_ref()
     }
 
     /// The discretization.
@@ -201,7 +288,7 @@ impl AssemblyPlan {
     }
 
     /// Class codes, `n × n`, row-major by (element of the collocation block, element):
-    /// [`CLASS_CULLED`], far degree + 1, [`CLASS_NEAR`] or [`CLASS_SELF`].
+    /// [`CLASS_CULLED`], far degree + 1, [`CLASS_PARTIAL`], [`CLASS_NEAR`] or [`CLASS_SELF`].
     pub fn classes(&self) -> &[u8] {
         &self.classes
     }
@@ -286,10 +373,35 @@ impl AssemblyPlan {
                         }
                     }
                 }
-                code if code != CLASS_NEAR
-                    && code != CLASS_SELF
-                    && mode != FillMode::SpecialOnly =>
-                {
+                CLASS_PARTIAL if mode != FillMode::FarOnly => {
+                    let occ = self
+                        .occluders
+                        .as_ref()
+                        .expect("partial pairs exist only with occluders");
+                    let mesh = self.disc.mesh();
+                    for ke in k..end {
+                        let cands = self.partial[kp].candidates_of(ke);
+                        let verts = mesh.vertices(ke);
+                        for (row, p) in pts.iter().enumerate() {
+                            let out = &mut block[row * ncols + ke * f..row * ncols + (ke + 1) * f];
+                            out.fill(0.0);
+                            let fp = FieldPoint {
+                                position: p.position,
+                                normal: p.normal,
+                                on_element: None,
+                            };
+                            for piece in
+                                clip::visible_region(p.position, p.normal, &verts, occ, cands)
+                            {
+                                for tri in clip::triangles(&piece) {
+                                    evals +=
+                                        integrator.integrate_region(&fp, ke, tri, r, &phi, out);
+                                }
+                            }
+                        }
+                    }
+                }
+                code if !is_special(code) && mode != FillMode::SpecialOnly => {
                     let t = self.tables[(code - 1) as usize]
                         .as_ref()
                         .expect("plan builds every table it uses");
@@ -321,6 +433,26 @@ impl AssemblyPlan {
         }
         evals
     }
+}
+
+/// Decides whether the pair (flat element A of the block, flat element B)
+/// needs clipping: B straddles A's tangent plane (the clamped cosine has a
+/// kink inside B), or some occluder meets conv(A ∪ B); `cands` receives the
+/// occluders. Curved elements are never partial (curved scenes that occlude
+/// are refused before assembly).
+fn partly_visible(
+    occ: &Occluders,
+    (va, na): ([glam::DVec3; 3], glam::DVec3),
+    (vb, nb): ([glam::DVec3; 3], glam::DVec3),
+    cands: &mut Vec<u32>,
+) -> bool {
+    cands.clear();
+    let tol = 1e-12 * occ.scale();
+    let side = vb.map(|x| (x - va[0]).dot(na));
+    let straddles = side.iter().any(|&d| d > tol) && side.iter().any(|&d| d < -tol);
+    let pts = [va[0], va[1], va[2], vb[0], vb[1], vb[2]];
+    occ.candidates(&pts, &[(va[0], na), (vb[0], nb)], cands);
+    straddles || !cands.is_empty()
 }
 
 /// Elements per run at most (bounds the kernel buffer).

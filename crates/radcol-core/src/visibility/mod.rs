@@ -5,6 +5,11 @@
 //! [`analyze`] decides that from the geometry once, so convex enclosures (the
 //! built-in analytic surfaces, a box room, two facing plates) never pay for it.
 
+pub mod clip;
+pub mod occluders;
+
+pub use occluders::Occluders;
+
 use crate::geometry::Surface;
 use glam::DVec3;
 use serde::Serialize;
@@ -96,7 +101,7 @@ fn concave_witness(tris: &[[DVec3; 3]]) -> Option<(usize, DVec3)> {
     for (i, [a, b, c]) in tris.iter().enumerate() {
         let n = (*b - *a).cross(*c - *a);
         let len = n.length();
-        if !(len > 0.0) {
+        if len.is_nan() || len <= 0.0 {
             continue;
         }
         let n = n / len;

@@ -1,0 +1,303 @@
+//! The triangles that can hide one part of a scene from another, with a BVH
+//! (obvhs) for the broad phase and an exact separating-axis test for the
+//! narrow phase.
+//!
+//! For a pair of flat elements A and B every segment between a point of A and
+//! a point of B lies in the convex hull H = conv(A ∪ B), and H is the union of
+//! those segments. A triangle that does not meet H (touching its boundary
+//! counts as not meeting: it blocks only a set of measure zero) can therefore
+//! never occlude the pair: V ≡ 1 on it, and the pair keeps its ordinary far or
+//! near rule. Only the triangles that do meet H are kept as candidates, and the
+//! pair is integrated with the visible part clipped exactly
+//! ([`super::clip`]).
+
+use glam::{DVec3, Vec3A};
+use obvhs::aabb::Aabb;
+use obvhs::bvh2::builder::build_bvh2;
+use obvhs::bvh2::Bvh2;
+use obvhs::{Boundable, BvhBuildParams};
+use std::time::Duration;
+
+/// A triangle of the scene that may occlude, with its unit normal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Occluder {
+    /// Vertices.
+    pub v: [DVec3; 3],
+    /// Unit normal (b - a) × (c - a) / |…|.
+    pub normal: DVec3,
+}
+
+/// A padded f32 box around one triangle, for the BVH builder.
+struct PaddedBox(Aabb);
+
+impl Boundable for PaddedBox {
+    fn aabb(&self) -> Aabb {
+        self.0
+    }
+}
+
+/// Every triangle of a scene as a potential occluder, in a BVH.
+pub struct Occluders {
+    tris: Vec<Occluder>,
+    bvh: Bvh2,
+    /// Diameter of the scene's bounding box: tolerances are relative to it.
+    scale: f64,
+}
+
+impl std::fmt::Debug for Occluders {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Occluders")
+            .field("triangles", &self.tris.len())
+            .field("bvh_nodes", &self.bvh.nodes.len())
+            .field("scale", &self.scale)
+            .finish()
+    }
+}
+
+/// Relative tolerance of the geometric tests (touching, coplanarity).
+const REL_TOL: f64 = 1e-9;
+
+impl Occluders {
+    /// The occluders of `tris` (degenerate triangles are left out: they hide nothing).
+    pub fn new(tris: &[[DVec3; 3]]) -> Self {
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for v in tris.iter().flatten() {
+            lo = lo.min(*v);
+            hi = hi.max(*v);
+        }
+        let scale = if tris.is_empty() {
+            1.0
+        } else {
+            (hi - lo).length().max(f64::MIN_POSITIVE)
+        };
+        let tris: Vec<Occluder> = tris
+            .iter()
+            .filter_map(|&v| {
+                let n = (v[1] - v[0]).cross(v[2] - v[0]);
+                let len = n.length();
+                (len > 0.0).then(|| Occluder { v, normal: n / len })
+            })
+            .collect();
+        // Boxes widened by far more than f32 rounding, so the f32 broad phase
+        // never drops a triangle the exact test would keep.
+        let pad = 1e-5 * scale;
+        let boxes: Vec<PaddedBox> = tris
+            .iter()
+            .map(|t| {
+                let (a, b) = bounds(&t.v);
+                PaddedBox(Aabb::new(to_f32(a - pad), to_f32(b + pad)))
+            })
+            .collect();
+        let bvh = build_bvh2(
+            &boxes,
+            BvhBuildParams::medium_build(),
+            &mut Duration::default(),
+        );
+        Self { tris, bvh, scale }
+    }
+
+    /// Number of occluders.
+    pub fn len(&self) -> usize {
+        self.tris.len()
+    }
+
+    /// True when there is none.
+    pub fn is_empty(&self) -> bool {
+        self.tris.is_empty()
+    }
+
+    /// Occluder `i`.
+    pub fn get(&self, i: u32) -> &Occluder {
+        &self.tris[i as usize]
+    }
+
+    /// Diameter of the scene (the unit of every tolerance).
+    pub fn scale(&self) -> f64 {
+        self.scale
+    }
+
+    /// Appends to `out` the occluders that meet the interior of conv(`pts`),
+    /// leaving out triangles coplanar with one of the planes in `own_planes`
+    /// (point, unit normal): the faces the segments start or end on, and their
+    /// coplanar neighbours, which a segment leaving the plane cannot cross.
+    pub fn candidates(&self, pts: &[DVec3], own_planes: &[(DVec3, DVec3)], out: &mut Vec<u32>) {
+        if self.tris.is_empty() {
+            return;
+        }
+        let (lo, hi) = bounds(pts);
+        let pad = 1e-5 * self.scale;
+        let query = Aabb::new(to_f32(lo - pad), to_f32(hi + pad));
+        let hull = HullAxes::new(pts);
+        let tol = REL_TOL * self.scale;
+        self.bvh.aabb_traverse(query, |bvh, node_index| {
+            let node = &bvh.nodes[node_index as usize];
+            for slot in node.first_index..node.first_index + node.prim_count {
+                let i = bvh.primitive_indices[slot as usize];
+                let t = &self.tris[i as usize];
+                let coplanar = own_planes
+                    .iter()
+                    .any(|&(p, n)| t.v.iter().all(|v| (*v - p).dot(n).abs() <= tol));
+                if !coplanar && hull.meets(pts, t, tol) {
+                    out.push(i);
+                }
+            }
+            true
+        });
+        out.sort_unstable();
+        out.dedup();
+    }
+}
+
+fn bounds(pts: &[DVec3]) -> (DVec3, DVec3) {
+    pts.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    )
+}
+
+fn to_f32(v: DVec3) -> Vec3A {
+    // Rounding outward is not needed: the padding is 100× f32's relative step.
+    Vec3A::new(v.x as f32, v.y as f32, v.z as f32)
+}
+
+/// Candidate separating directions of a small point set's hull: the normals
+/// of all its point triples and its point-to-point edges (a superset of the
+/// hull's face normals and edges, so the separating-axis theorem stays exact).
+struct HullAxes {
+    normals: Vec<DVec3>,
+    edges: Vec<DVec3>,
+}
+
+impl HullAxes {
+    fn new(pts: &[DVec3]) -> Self {
+        let m = pts.len();
+        let mut normals = Vec::with_capacity(m * m * m / 6);
+        let mut edges = Vec::with_capacity(m * m / 2);
+        for i in 0..m {
+            for j in i + 1..m {
+                let e = pts[j] - pts[i];
+                if e.length_squared() > 0.0 {
+                    edges.push(e);
+                }
+                for k in j + 1..m {
+                    let n = e.cross(pts[k] - pts[i]);
+                    if n.length_squared() > 0.0 {
+                        normals.push(n);
+                    }
+                }
+            }
+        }
+        Self { normals, edges }
+    }
+
+    /// True when triangle `t` and conv(`pts`) overlap by more than `tol`
+    /// along every candidate axis (the separating-axis theorem for convex
+    /// polytopes, with touching counted as separated).
+    fn meets(&self, pts: &[DVec3], t: &Occluder, tol: f64) -> bool {
+        let separated = |axis: DVec3| -> bool {
+            let len = axis.length();
+            if len.is_nan() || len <= 0.0 {
+                return false;
+            }
+            let (mut h0, mut h1) = (f64::INFINITY, f64::NEG_INFINITY);
+            for p in pts {
+                let d = p.dot(axis);
+                h0 = h0.min(d);
+                h1 = h1.max(d);
+            }
+            let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
+            for v in &t.v {
+                let d = v.dot(axis);
+                t0 = t0.min(d);
+                t1 = t1.max(d);
+            }
+            h1 <= t0 + tol * len || t1 <= h0 + tol * len
+        };
+        if separated(t.normal) {
+            return false;
+        }
+        if self.normals.iter().any(|&n| separated(n)) {
+            return false;
+        }
+        let te = [t.v[1] - t.v[0], t.v[2] - t.v[1], t.v[0] - t.v[2]];
+        for &e in &self.edges {
+            if separated(e.cross(t.normal)) {
+                return false;
+            }
+            for &f in &te {
+                if separated(e.cross(f)) {
+                    return false;
+                }
+            }
+        }
+        // Axes in the triangle's plane across its own edges (needed when the
+        // hull is flat in a plane near the triangle's).
+        for &f in &te {
+            if separated(f.cross(t.normal)) {
+                return false;
+            }
+        }
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tri(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [DVec3; 3] {
+        [DVec3::from(a), DVec3::from(b), DVec3::from(c)]
+    }
+
+    /// A blocker between two parallel squares is a candidate; one beside them
+    /// is not; one touching the hull only along an edge is not.
+    #[test]
+    fn candidates_between_two_plates() {
+        let floor = [
+            DVec3::new(0., 0., 0.),
+            DVec3::new(1., 0., 0.),
+            DVec3::new(0., 1., 0.),
+        ];
+        let ceiling = [
+            DVec3::new(0., 0., 1.),
+            DVec3::new(0., 1., 1.),
+            DVec3::new(1., 0., 1.),
+        ];
+        let tris = vec![
+            floor,
+            ceiling,
+            // 0: a horizontal blocker half way up, inside the hull.
+            tri([0.1, 0.1, 0.5], [0.3, 0.1, 0.5], [0.1, 0.3, 0.5]),
+            // 1: beside the hull.
+            tri([2.0, 2.0, 0.5], [3.0, 2.0, 0.5], [2.0, 3.0, 0.5]),
+            // 2: a wall in the plane x = 0 touching the hull along its face.
+            tri([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]),
+            // 3: a vertical blade crossing the hull.
+            tri([0.2, -0.5, 0.2], [0.2, 1.5, 0.2], [0.2, 0.5, 0.8]),
+        ];
+        let occ = Occluders::new(&tris);
+        let pts: Vec<DVec3> = floor.iter().chain(&ceiling).copied().collect();
+        let planes = [(floor[0], DVec3::Z), (ceiling[0], -DVec3::Z)];
+        let mut out = Vec::new();
+        occ.candidates(&pts, &planes, &mut out);
+        assert_eq!(out, vec![2, 5], "candidate indices");
+    }
+
+    /// Scale invariance: the same configuration scaled by 1e-3 and 1e3 gives
+    /// the same candidates.
+    #[test]
+    fn candidates_do_not_depend_on_units() {
+        for s in [1e-3, 1.0, 1e3] {
+            let sc = |t: [DVec3; 3]| t.map(|v| v * s);
+            let a = sc(tri([0., 0., 0.], [1., 0., 0.], [0., 1., 0.]));
+            let b = sc(tri([0., 0., 1.], [0., 1., 1.], [1., 0., 1.]));
+            let blocker = sc(tri([0.1, 0.1, 0.5], [0.3, 0.1, 0.5], [0.1, 0.3, 0.5]));
+            let grazing = sc(tri([1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [1.0, 0.0, 1.0]));
+            let occ = Occluders::new(&[a, b, blocker, grazing]);
+            let pts: Vec<DVec3> = a.iter().chain(&b).copied().collect();
+            let mut out = Vec::new();
+            occ.candidates(&pts, &[(a[0], DVec3::Z), (b[0], -DVec3::Z)], &mut out);
+            assert_eq!(out, vec![2], "scale {s}");
+        }
+    }
+}
