@@ -370,12 +370,15 @@ fn match_tobj(
     materials: &[Material],
 ) -> Result<Vec<RawTriangle>, SceneError> {
     let reader_error = |at: String, message: String| SceneError::Reader { at, message };
-    // Field by field: more fields exist when tobj's optional features are on.
-    let mut options = tobj::LoadOptions::default();
-    options.single_index = true;
-    options.triangulate = true;
-    options.ignore_points = true;
-    options.ignore_lines = true;
+    // More fields exist when tobj's optional features are on, hence the update.
+    #[allow(clippy::needless_update)]
+    let options = tobj::LoadOptions {
+        single_index: true,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
     let (models, tobj_materials) =
         tobj::load_obj_buf(&mut text.as_bytes(), &options, |p| {
             match libs.get(p.to_string_lossy().as_ref()) {
