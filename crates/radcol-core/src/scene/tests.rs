@@ -325,3 +325,312 @@ fn in_memory_obj_names_its_files() {
         .to_string();
     assert!(msg.starts_with("mem.obj:10:"), "{msg}");
 }
+
+/// Shoelace area of a planar polygon given by its corners.
+fn polygon_area(p: &[DVec3]) -> f64 {
+    let n: DVec3 = (0..p.len()).map(|i| p[i].cross(p[(i + 1) % p.len()])).sum();
+    0.5 * n.length()
+}
+
+fn patch<'a>(s: &'a Scene, name: &str) -> &'a crate::geometry::Patch {
+    s.surface
+        .patches
+        .iter()
+        .find(|p| p.name == name)
+        .unwrap_or_else(|| panic!("no patch {name}"))
+}
+
+fn patch_area(s: &Scene, name: &str) -> f64 {
+    patch(s, name)
+        .triangles
+        .iter()
+        .map(|[a, b, c]| 0.5 * (*b - *a).cross(*c - *a).length())
+        .sum()
+}
+
+fn normal([a, b, c]: &[DVec3; 3]) -> DVec3 {
+    (*b - *a).cross(*c - *a).normalize()
+}
+
+fn centroid(t: &[DVec3; 3]) -> DVec3 {
+    (t[0] + t[1] + t[2]) / 3.0
+}
+
+#[test]
+fn builtins_load_without_warnings_or_duplicates() {
+    assert!(builtin("nope").is_none());
+    for (name, _) in BUILTIN_SCENES {
+        let s = builtin(name).unwrap().unwrap();
+        assert!(s.warnings.is_empty(), "{name}: {:?}", s.warnings);
+        assert!(s.camera.is_some());
+        // No face twice, in either orientation.
+        let mut keys: Vec<_> = s
+            .triangles()
+            .map(|(_, t)| {
+                let mut k = t.map(|v| v.to_array().map(f64::to_bits));
+                k.sort();
+                k
+            })
+            .collect();
+        let n = keys.len();
+        keys.sort();
+        keys.dedup();
+        assert_eq!(keys.len(), n, "{name}");
+        assert_eq!(s.emitters().len(), 1, "{name}");
+    }
+}
+
+#[test]
+fn cornell_box_geometry_orientation_and_materials() {
+    let s = builtin("cornell").unwrap().unwrap();
+    assert_eq!(s.triangle_count(), 2 + 8 + 2 + 3 * 2 + 2 * 10);
+    assert!(!s.surface.convex_enclosure, "the blocks occlude");
+    let v = |x, y, z| DVec3::new(x, y, z);
+    // Areas from the published corners (shoelace), independent of the triangulation.
+    let floor = [
+        v(552.8, 0., 0.),
+        v(0., 0., 0.),
+        v(0., 0., 559.2),
+        v(549.6, 0., 559.2),
+    ];
+    let ceiling = [
+        v(556., 548.8, 0.),
+        v(556., 548.8, 559.2),
+        v(0., 548.8, 559.2),
+        v(0., 548.8, 0.),
+    ];
+    let light = [
+        v(343., 548.8, 227.),
+        v(343., 548.8, 332.),
+        v(213., 548.8, 332.),
+        v(213., 548.8, 227.),
+    ];
+    let rel = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b;
+    assert!(rel(patch_area(&s, "floor/white"), polygon_area(&floor)));
+    assert!(rel(patch_area(&s, "light/light"), 130.0 * 105.0));
+    assert!(rel(polygon_area(&light), 130.0 * 105.0));
+    // The hole: ceiling ring + light = full ceiling, so they do not overlap.
+    assert!(rel(
+        patch_area(&s, "ceiling/white") + patch_area(&s, "light/light"),
+        polygon_area(&ceiling)
+    ));
+    // The light is emitted downwards, into the room.
+    for t in &patch(&s, "light/light").triangles {
+        assert!(
+            normal(t).dot(DVec3::NEG_Y) > 1.0 - 1e-12,
+            "light faces down"
+        );
+    }
+    // Room faces point to the room's centre, block faces away from their axis.
+    let room_centre = v(278.0, 274.4, 279.6);
+    for name in [
+        "floor/white",
+        "ceiling/white",
+        "back_wall/white",
+        "right_wall/green",
+        "left_wall/red",
+    ] {
+        for t in &patch(&s, name).triangles {
+            assert!(normal(t).dot(room_centre - centroid(t)) > 0.0, "{name}");
+        }
+    }
+    for (name, top, h) in [
+        (
+            "short_block/white",
+            [
+                v(130., 165., 65.),
+                v(82., 165., 225.),
+                v(240., 165., 272.),
+                v(290., 165., 114.),
+            ],
+            165.0,
+        ),
+        (
+            "tall_block/white",
+            [
+                v(423., 330., 247.),
+                v(265., 330., 296.),
+                v(314., 330., 456.),
+                v(472., 330., 406.),
+            ],
+            330.0,
+        ),
+    ] {
+        let c = (top[0] + top[1] + top[2] + top[3]) / 4.0 - DVec3::Y * (h / 2.0);
+        let tris = &patch(&s, name).triangles;
+        assert_eq!(tris.len(), 10);
+        for t in tris {
+            assert!(normal(t).dot(centroid(t) - c) > 0.0, "{name}");
+        }
+        let sides: f64 = (0..4)
+            .map(|i| (top[(i + 1) % 4] - top[i]).length() * h)
+            .sum();
+        assert!(
+            rel(patch_area(&s, name), polygon_area(&top) + sides),
+            "{name}"
+        );
+    }
+    // Red wall at x ≈ 556 appears on the left of the camera's image.
+    let cam = s.camera.unwrap();
+    assert!(
+        (cam.fov_y_deg - 39.3076481).abs() < 1e-6,
+        "{}",
+        cam.fov_y_deg
+    );
+    let (right, _, _) = cam.basis();
+    let red = centroid(&patch(&s, "left_wall/red").triangles[0]);
+    assert!((red - cam.eye).dot(right) < 0.0);
+    let red_m = s.material_of(
+        s.surface
+            .patches
+            .iter()
+            .position(|p| p.name == "left_wall/red")
+            .unwrap(),
+    );
+    assert_eq!(red_m.rho, [0.63, 0.065, 0.05]);
+    let light_m = s.material_of(s.emitters()[0]);
+    assert_eq!(
+        (light_m.rho, light_m.emission),
+        ([0.78; 3], [17.0, 12.0, 4.0])
+    );
+}
+
+#[test]
+fn room_is_a_convex_box_with_a_ceiling_light() {
+    let s = builtin("room").unwrap().unwrap();
+    assert!(s.surface.convex_enclosure);
+    assert_eq!(s.triangle_count(), 2 + 8 + 2 + 4 * 2);
+    let rel = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b;
+    assert!(rel(s.area(), 2.0 * (4.0 * 3.0 + 4.0 * 5.0 + 3.0 * 5.0)));
+    assert!(rel(patch_area(&s, "light/light"), 1.0));
+    assert!(rel(patch_area(&s, "ceiling/white"), 19.0));
+    let c = DVec3::new(2.0, 1.5, 2.5);
+    for (_, t) in s.triangles() {
+        assert!(normal(&t).dot(c - centroid(&t)) > 0.0);
+    }
+    let (lo, hi) = s.bounding_box();
+    assert_eq!((lo, hi), (DVec3::ZERO, DVec3::new(4.0, 3.0, 5.0)));
+    let cam = s.camera.unwrap();
+    assert!(
+        cam.eye.cmpgt(lo).all() && cam.eye.cmplt(hi).all(),
+        "camera inside"
+    );
+}
+
+#[test]
+fn plates_are_mirror_images() {
+    let s = builtin("plates").unwrap().unwrap();
+    assert!(s.surface.convex_enclosure);
+    let bottom = &patch(&s, "bottom/white").triangles;
+    let top = &patch(&s, "top/light").triangles;
+    assert_eq!((bottom.len(), top.len()), (2, 2));
+    let mirror = |v: DVec3| DVec3::new(v.x, v.y, 1.0 - v.z);
+    let sorted = |t: [DVec3; 3]| {
+        let mut k = t.map(|v| v.to_array().map(f64::to_bits));
+        k.sort();
+        k
+    };
+    for (b, t) in bottom.iter().zip(top) {
+        assert_eq!(sorted(b.map(mirror)), sorted(*t));
+        assert_eq!(normal(b), DVec3::Z);
+        assert_eq!(normal(t), DVec3::NEG_Z);
+    }
+    assert_eq!(s.problem().channels[0].name, "R");
+    assert_eq!(s.emitters(), vec![1]);
+    assert_eq!(s.material_of(1).emission, [1.0; 3]);
+    assert_eq!(s.material_of(1).rho, [0.5; 3]);
+    assert_eq!(s.material_of(0).rho, [0.5; 3]);
+}
+
+#[test]
+fn builder_errors_name_group_and_face() {
+    use glam::Vec3;
+    let mut b = SceneBuilder::new("b");
+    let msg = b
+        .add_material(Material::diffuse("bad", [0.5, 1.0, 0.5]))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("material 0 'bad'") && msg.contains("Kd G = 1"),
+        "{msg}"
+    );
+    let msg = b
+        .add_material(Material::emitter("hot", [0.5; 3], [0.0, 0.0, -2.0]))
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("Ke B = -2"), "{msg}");
+    let white = b
+        .add_material(Material::diffuse("white", [0.5; 3]))
+        .unwrap();
+    let quad = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
+    let msg = b
+        .add_mesh("m", &quad, &[[0, 1, 2]], 7)
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("material index 7"), "{msg}");
+    let msg = b
+        .add_mesh("m", &quad, &[[0, 1, 2], [0, 2, 4]], white)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("mesh 'm' face 1") && msg.contains("index 4"),
+        "{msg}"
+    );
+    let msg = b
+        .add_mesh(
+            "m",
+            &[Vec3::ZERO, Vec3::X, Vec3::new(0.0, f32::NAN, 0.0)],
+            &[[0, 1, 2]],
+            white,
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("mesh 'm' vertex 2") && msg.contains("NaN"),
+        "{msg}"
+    );
+    assert!(matches!(b.build(), Err(SceneError::Empty { .. })));
+    // Faces are numbered per group across calls: the second call's faces are 2 and 3.
+    b.add_mesh("m", &quad, &[[0, 1, 2], [0, 2, 3]], white)
+        .unwrap();
+    b.add_mesh("m", &quad, &[[0, 1, 1], [2, 3, 0]], white)
+        .unwrap();
+    let s = b.build().unwrap();
+    assert_eq!(s.triangle_count(), 2);
+    assert!(
+        s.warnings[0].starts_with("mesh 'm' face 2: degenerate"),
+        "{:?}",
+        s.warnings
+    );
+    assert!(
+        s.warnings[1].starts_with("mesh 'm' face 3: duplicate of the triangle at mesh 'm' face 1"),
+        "{:?}",
+        s.warnings
+    );
+    // A degenerate camera is refused.
+    b.camera(crate::camera::Camera {
+        eye: DVec3::ZERO,
+        target: DVec3::ZERO,
+        up: DVec3::Y,
+        fov_y_deg: 40.0,
+    });
+    assert!(matches!(b.build(), Err(SceneError::Camera { .. })));
+}
+
+/// Many warnings of one kind are capped and counted.
+#[test]
+fn warnings_are_capped() {
+    let mut b = SceneBuilder::new("cap");
+    let white = b
+        .add_material(Material::diffuse("white", [0.5; 3]))
+        .unwrap();
+    let p = [DVec3::ZERO, DVec3::X, DVec3::Y];
+    let tris: Vec<[u32; 3]> = std::iter::repeat_n([0, 1, 2], MAX_WARNINGS_PER_KIND + 6).collect();
+    b.add_mesh_f64("g", &p, &tris, white).unwrap();
+    let s = b.build().unwrap();
+    assert_eq!(s.warnings.len(), MAX_WARNINGS_PER_KIND + 1);
+    assert_eq!(
+        s.warnings.last().unwrap(),
+        "... and 5 more duplicate-triangle warnings"
+    );
+}
