@@ -318,6 +318,7 @@ fn setup(p: &ProblemArgs, level: u32, max_level: u32) -> Result<Setup> {
             ..QuadratureOptions::default()
         },
         check_memory: true,
+        max_edge: None,
     };
     Ok(Setup {
         scene: surface.name.clone(),

@@ -78,6 +78,79 @@ impl Mesh {
         }
     }
 
+    /// The base triangulation refined `level` times, then each element refined
+    /// 4:1 again, recursively, until the longest edge of its mapped triangle
+    /// (the straight chords between its mapped vertices) is at most `max_edge`.
+    ///
+    /// Refinement is depth-first per element, so the descendants of every
+    /// element stay consecutive in the element order (the assembly relies on
+    /// neighbours being close in the numbering). A `max_edge` that is not a
+    /// positive finite number sets no bound (the mesh of [`Mesh::new`]);
+    /// callers that take it from users should refuse such values first.
+    pub fn with_max_edge(surface: Arc<Surface>, level: u32, max_edge: f64) -> Self {
+        let uniform = Self::new(surface.clone(), level);
+        if !is_edge_bound(max_edge) {
+            return uniform;
+        }
+        let mut elements = Vec::with_capacity(uniform.len());
+        for e in &uniform.elements {
+            refine_to_max_edge(&surface, *e, max_edge, &mut |child| {
+                elements.push(child);
+                true
+            });
+        }
+        Self {
+            surface,
+            level,
+            elements,
+        }
+    }
+
+    /// The number of elements of [`Mesh::with_max_edge`] with the same
+    /// arguments, without storing them (for memory checks). Counts above
+    /// [`MAX_EDGE_COUNT_CAP`] stop early and return `u64::MAX`: no dense
+    /// matrix of that many elements fits in any memory.
+    pub fn count_with_max_edge(surface: Arc<Surface>, level: u32, max_edge: f64) -> u64 {
+        let base = surface.base_triangle_count() as u64;
+        if !is_edge_bound(max_edge) {
+            return base.saturating_mul(4u64.saturating_pow(level));
+        }
+        let mut count = 0u64;
+        let mut uniform = surface.patches.iter().enumerate().flat_map(|(j, p)| {
+            p.triangles.iter().map(move |&param| Element {
+                patch: j as u32,
+                param,
+            })
+        });
+        // Walks the uniform level depth-first too, so that a huge `level`
+        // stops at the cap instead of materialising every element first.
+        fn uniform_then_bound(
+            surface: &Surface,
+            e: Element,
+            depth: u32,
+            max_edge: f64,
+            visit: &mut dyn FnMut(Element) -> bool,
+        ) -> bool {
+            if depth == 0 {
+                return refine_to_max_edge(surface, e, max_edge, visit);
+            }
+            e.children()
+                .into_iter()
+                .all(|c| uniform_then_bound(surface, c, depth - 1, max_edge, visit))
+        }
+        let complete = uniform.all(|e| {
+            uniform_then_bound(&surface, e, level, max_edge, &mut |_| {
+                count += 1;
+                count <= MAX_EDGE_COUNT_CAP
+            })
+        });
+        if complete {
+            count
+        } else {
+            u64::MAX
+        }
+    }
+
     /// Builds a mesh from explicit elements (for example an OBJ triangulation).
     pub fn from_elements(surface: Arc<Surface>, level: u32, elements: Vec<Element>) -> Self {
         Self {
@@ -296,6 +369,40 @@ impl Element {
     }
 }
 
+/// [`Mesh::count_with_max_edge`] gives up (returns `u64::MAX`) above this many elements.
+pub const MAX_EDGE_COUNT_CAP: u64 = 1 << 22;
+
+fn is_edge_bound(max_edge: f64) -> bool {
+    max_edge.is_finite() && max_edge > 0.0
+}
+
+/// Longest straight edge between the mapped vertices of `e`.
+fn mapped_longest_edge(surface: &Surface, e: &Element) -> f64 {
+    let f = &surface.patches[e.patch as usize].map;
+    let [a, b, c] = e.param.map(|x| f.map(x));
+    (b - a).length().max((c - b).length()).max((a - c).length())
+}
+
+/// Calls `visit` on the leaves of the 4:1 refinement of `e` whose longest
+/// mapped edge is ≤ `max_edge`, depth-first in children order; stops (and
+/// returns false) as soon as `visit` returns false.
+fn refine_to_max_edge(
+    surface: &Surface,
+    e: Element,
+    max_edge: f64,
+    visit: &mut dyn FnMut(Element) -> bool,
+) -> bool {
+    // The longest edge halves at each step, so the depth is bounded by
+    // log2(edge / max_edge); NaN edges (bad geometry) are leaves.
+    let longest = mapped_longest_edge(surface, &e);
+    if longest.is_nan() || longest <= max_edge {
+        return visit(e);
+    }
+    e.children()
+        .into_iter()
+        .all(|c| refine_to_max_edge(surface, c, max_edge, visit))
+}
+
 /// Diameter over inradius of a triangle (eq. 32); 2√3 ≈ 3.46 for an equilateral one.
 pub fn shape_ratio([a, b, c]: [DVec3; 3]) -> f64 {
     let (la, lb, lc) = ((b - c).length(), (c - a).length(), (a - b).length());
@@ -369,6 +476,65 @@ mod tests {
             }
         }
         assert!(edges.values().all(|&c| c == 2));
+    }
+
+    /// Every edge ends ≤ H, the counter agrees with the builder, children stay
+    /// consecutive (each element lies inside its uniform-level ancestor, in order).
+    #[test]
+    fn max_edge_refinement_bounds_edges_and_matches_the_counter() {
+        for (surface, level, h) in [
+            (Arc::new(box_room(1.0, 2.0, 3.0)), 0, 0.7),
+            (Arc::new(box_room(1.0, 2.0, 3.0)), 1, 0.3),
+            (Arc::new(sphere(1.0)), 1, 0.25),
+            (Arc::new(box_room(1.0, 2.0, 3.0)), 1, 10.0),
+        ] {
+            let m = Mesh::with_max_edge(surface.clone(), level, h);
+            assert_eq!(
+                m.len() as u64,
+                Mesh::count_with_max_edge(surface.clone(), level, h)
+            );
+            for k in 0..m.len() {
+                let [a, b, c] = m.vertices(k);
+                let longest = (b - a).length().max((c - b).length()).max((a - c).length());
+                assert!(longest <= h, "element {k}: edge {longest} > {h}");
+            }
+            // Order: walk the uniform mesh; the refined elements must come in
+            // runs lying inside each uniform element in turn, and areas add up.
+            let uniform = Mesh::new(surface.clone(), level);
+            let mut k = 0;
+            for u in 0..uniform.len() {
+                let mut area = 0.0;
+                let parent = uniform.elements()[u];
+                while k < m.len() && m.elements()[k].patch == parent.patch && {
+                    let e = m.elements()[k];
+                    let c = (e.param[0] + e.param[1] + e.param[2]) / 3.0;
+                    crate::problem::barycentric_st(
+                        parent.param[0],
+                        parent.param[1],
+                        parent.param[2],
+                        c,
+                    )
+                    .is_some_and(|[s, t]| s > 0.0 && t > 0.0 && s + t < 1.0)
+                } {
+                    let [a, b, c] = m.elements()[k].param;
+                    area += 0.5 * (b - a).cross(c - a).length();
+                    k += 1;
+                }
+                let [a, b, c] = parent.param;
+                let want = 0.5 * (b - a).cross(c - a).length();
+                assert!((area - want).abs() <= 1e-12 * want, "uniform element {u}");
+            }
+            assert_eq!(k, m.len());
+        }
+        // Box 1 × 2 × 3, two triangles per wall, 4:1 children similar with
+        // halved edges: a wall a × b needs the least d with √(a² + b²)/2^d ≤ H.
+        // H = 1: √5, √10, √13 all need d = 2 → 12 · 16. H = 0.7: the 1 × 2
+        // walls d = 2 (0.56), the others d = 3 (0.79, 0.90 > 0.7) → 4·16 + 8·64.
+        let b = Arc::new(box_room(1.0, 2.0, 3.0));
+        assert_eq!(Mesh::count_with_max_edge(b.clone(), 0, 1.0), 192);
+        assert_eq!(Mesh::with_max_edge(b.clone(), 0, 0.7).len(), 576);
+        assert_eq!(Mesh::with_max_edge(b.clone(), 0, f64::NAN).len(), 12);
+        assert_eq!(Mesh::count_with_max_edge(b.clone(), 0, 1e-9), u64::MAX);
     }
 
     #[test]

@@ -1,0 +1,452 @@
+//! Wavefront OBJ + MTL input.
+//!
+//! tobj reads the file's structure (objects/groups, materials, polygons
+//! fan-triangulated from their first vertex). tobj gives no line numbers and
+//! (as the workspace builds it) parses in single precision, so a line scan
+//! first reads every statement radcol needs in double precision with its
+//! 1-based line: vertices, faces, `g`/`o`, `usemtl`, `mtllib` and the MTL
+//! files' `newmtl`/`Kd`/`Ke`. tobj emits its models in file order (a new model
+//! at every group or material change, faces in order), so its triangles are
+//! matched one by one with the scanned faces' fans; any disagreement in group,
+//! material or position is an error rather than a silent mismatch. Polyline
+//! (`l`) and point (`p`) statements are not surfaces: they are skipped with a
+//! warning.
+
+use super::validate::{check_material, finish, RawScene, RawTriangle};
+use super::{Material, Scene, SceneError};
+use glam::DVec3;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Reads an OBJ file and the MTL files it names (relative to its folder).
+pub fn load_obj(path: &Path) -> Result<Scene, SceneError> {
+    let text = std::fs::read_to_string(path).map_err(|e| SceneError::Unreadable {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    let resolve = |lib: &str| {
+        let p = dir.join(lib);
+        match std::fs::read_to_string(&p) {
+            Ok(t) => Ok((p.display().to_string(), t)),
+            Err(e) => Err((p, e.to_string())),
+        }
+    };
+    let mut scene = parse(&name, &path.display().to_string(), &text, &resolve)?;
+    scene.source = Some(path.to_path_buf());
+    Ok(scene)
+}
+
+/// Reads an OBJ text held in memory; `mtl` gives the text of each material
+/// library by the name its `mtllib` statement uses. Messages call the OBJ
+/// "`name`.obj" and each library by its name.
+pub fn load_obj_str(name: &str, obj: &str, mtl: &[(&str, &str)]) -> Result<Scene, SceneError> {
+    let resolve = |lib: &str| match mtl.iter().find(|(n, _)| *n == lib) {
+        Some((n, t)) => Ok((n.to_string(), t.to_string())),
+        None => Err((
+            PathBuf::from(lib),
+            "no such built-in material library".into(),
+        )),
+    };
+    parse(name, &format!("{name}.obj"), obj, &resolve)
+}
+
+/// A face as the line scan read it.
+#[derive(Debug)]
+struct ScanFace {
+    line: usize,
+    group: String,
+    material: usize,
+    vertices: Vec<usize>,
+}
+
+type Resolver<'a> = dyn Fn(&str) -> Result<(String, String), (PathBuf, String)> + 'a;
+
+fn syntax(at: String, message: impl Into<String>) -> SceneError {
+    SceneError::Syntax {
+        at,
+        message: message.into(),
+    }
+}
+
+/// The rest of a statement after its keyword, trimmed.
+fn rest<'a>(line: &'a str, keyword: &str) -> &'a str {
+    line[keyword.len()..].trim()
+}
+
+fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene, SceneError> {
+    let at = |line: usize| format!("{file}:{line}");
+    let mut positions: Vec<DVec3> = Vec::new();
+    let mut materials: Vec<Material> = Vec::new();
+    let mut by_name: HashMap<String, usize> = HashMap::new();
+    let mut libs: HashMap<String, String> = HashMap::new();
+    let mut group = "unnamed_object".to_string();
+    let mut material: Option<usize> = None;
+    let mut faces: Vec<ScanFace> = Vec::new();
+    let mut warnings = Vec::new();
+    let mut skipped: Vec<usize> = Vec::new();
+    // What tobj reads: the same lines, trimmed, with l/p statements blanked so
+    // that line-for-line structure is kept.
+    let mut for_tobj = String::with_capacity(text.len());
+
+    for (i, raw) in text.lines().enumerate() {
+        let line_no = i + 1;
+        let line = raw.trim();
+        let mut words = line.split_whitespace();
+        let keyword = words.next().unwrap_or("");
+        let mut pass = true;
+        match keyword {
+            "v" => {
+                let nums: Vec<f64> = words
+                    .map(|w| w.parse::<f64>())
+                    .collect::<Result<_, _>>()
+                    .map_err(|_| syntax(at(line_no), format!("cannot parse vertex '{line}'")))?;
+                if nums.len() < 3 {
+                    return Err(syntax(
+                        at(line_no),
+                        format!("vertex needs 3 coordinates: '{line}'"),
+                    ));
+                }
+                if let Some(&x) = nums[..3].iter().find(|x| !x.is_finite()) {
+                    return Err(SceneError::Vertex {
+                        at: at(line_no),
+                        value: x,
+                    });
+                }
+                let mut v = DVec3::new(nums[0], nums[1], nums[2]);
+                // A fourth number is the homogeneous weight w (tobj divides by it too).
+                if nums.len() == 4 {
+                    if !(nums[3].is_finite() && nums[3] != 0.0) {
+                        return Err(SceneError::Vertex {
+                            at: at(line_no),
+                            value: nums[3],
+                        });
+                    }
+                    v /= nums[3];
+                }
+                positions.push(v);
+            }
+            "f" => {
+                let mut vertices = Vec::new();
+                for w in words {
+                    let first = w.split('/').next().unwrap_or("");
+                    let index: i64 = first.parse().map_err(|_| {
+                        syntax(at(line_no), format!("cannot parse face index '{w}'"))
+                    })?;
+                    let n = positions.len() as i64;
+                    let resolved = if index < 0 { n + index } else { index - 1 };
+                    if index == 0 || resolved < 0 || resolved >= n {
+                        return Err(SceneError::IndexOutOfRange {
+                            at: at(line_no),
+                            index,
+                            count: positions.len(),
+                        });
+                    }
+                    vertices.push(resolved as usize);
+                }
+                if vertices.len() < 3 {
+                    return Err(SceneError::TooFewVertices {
+                        at: at(line_no),
+                        count: vertices.len(),
+                    });
+                }
+                let Some(material) = material else {
+                    return Err(SceneError::NoMaterial {
+                        at: at(line_no),
+                        message: "no usemtl statement before it".into(),
+                    });
+                };
+                if vertices.len() > 3 {
+                    let p: Vec<DVec3> = vertices.iter().map(|&v| positions[v]).collect();
+                    if let Some(off) = non_planarity(&p) {
+                        warnings.push(format!(
+                            "{}: polygon with {} vertices is not planar (a vertex lies {off:.3e} of its diameter off its plane); fan-triangulated from its first vertex",
+                            at(line_no),
+                            p.len()
+                        ));
+                    }
+                }
+                faces.push(ScanFace {
+                    line: line_no,
+                    group: group.clone(),
+                    material,
+                    vertices,
+                });
+            }
+            "l" | "p" => {
+                skipped.push(line_no);
+                pass = false;
+            }
+            "g" | "o" => {
+                group = rest(line, keyword).to_string();
+                if group.is_empty() {
+                    group = "unnamed_object".into();
+                }
+            }
+            "mtllib" => {
+                let lib = rest(line, keyword);
+                if lib.is_empty() {
+                    return Err(syntax(at(line_no), "mtllib without a file name"));
+                }
+                let (label, mtl_text) =
+                    resolve(lib).map_err(|(mtl, message)| SceneError::MaterialLibrary {
+                        at: at(line_no),
+                        mtl,
+                        message,
+                    })?;
+                for m in parse_mtl(&label, &mtl_text)? {
+                    by_name.insert(m.name.clone(), materials.len());
+                    materials.push(m);
+                }
+                libs.insert(lib.to_string(), mtl_text);
+            }
+            "usemtl" => {
+                let name = rest(line, keyword);
+                match by_name.get(name) {
+                    Some(&m) => material = Some(m),
+                    None => {
+                        return Err(SceneError::UndefinedMaterial {
+                            at: at(line_no),
+                            name: name.into(),
+                        })
+                    }
+                }
+            }
+            _ => {}
+        }
+        if pass {
+            for_tobj.push_str(line);
+        }
+        for_tobj.push('\n');
+    }
+    if let (Some(first), n) = (skipped.first(), skipped.len()) {
+        warnings.push(format!(
+            "{}: {n} polyline/point statement(s) (l, p) skipped: they are not surfaces",
+            at(*first)
+        ));
+    }
+
+    let triangles = match_tobj(file, &for_tobj, &libs, &faces, &positions, &materials)?
+        .into_iter()
+        .collect();
+    finish(RawScene {
+        name: name.into(),
+        materials,
+        triangles,
+        camera: None,
+        warnings,
+        source: None,
+    })
+}
+
+/// The largest distance of a vertex from the polygon's plane (Newell normal
+/// through the centroid) relative to its diameter, when above 1e-6.
+fn non_planarity(p: &[DVec3]) -> Option<f64> {
+    let n: DVec3 = (0..p.len()).map(|i| p[i].cross(p[(i + 1) % p.len()])).sum();
+    let c = p.iter().sum::<DVec3>() / p.len() as f64;
+    let diameter = p
+        .iter()
+        .flat_map(|a| p.iter().map(move |b| (*a - *b).length()))
+        .fold(0.0, f64::max);
+    let len = n.length();
+    if len.is_nan() || len <= 0.0 || diameter <= 0.0 {
+        // Collinear polygons are degenerate: the triangle checks report them.
+        return None;
+    }
+    let off = p
+        .iter()
+        .map(|v| ((*v - c).dot(n / len)).abs())
+        .fold(0.0, f64::max)
+        / diameter;
+    (off > 1e-6).then_some(off)
+}
+
+/// Parses an MTL text: every material needs `Kd` (three numbers in [0, 1));
+/// `Ke` (three numbers ≥ 0) defaults to 0.
+fn parse_mtl(file: &str, text: &str) -> Result<Vec<Material>, SceneError> {
+    struct Pending {
+        name: String,
+        line: usize,
+        kd: Option<([f64; 3], usize)>,
+        ke: Option<([f64; 3], usize)>,
+    }
+    let at = |line: usize| format!("{file}:{line}");
+    let close = |p: Pending| -> Result<Material, SceneError> {
+        let Some((rho, kd_line)) = p.kd else {
+            return Err(SceneError::MissingKd {
+                at: at(p.line),
+                material: p.name,
+            });
+        };
+        let (emission, ke_line) = p.ke.unwrap_or(([0.0; 3], p.line));
+        let m = Material {
+            name: p.name,
+            rho,
+            emission,
+        };
+        check_material(
+            &Material {
+                emission: [0.0; 3],
+                ..m.clone()
+            },
+            &at(kd_line),
+        )?;
+        check_material(
+            &Material {
+                rho: [0.0; 3],
+                ..m.clone()
+            },
+            &at(ke_line),
+        )?;
+        Ok(m)
+    };
+    let mut out = Vec::new();
+    let mut current: Option<Pending> = None;
+    for (i, raw) in text.lines().enumerate() {
+        let line_no = i + 1;
+        let line = raw.trim();
+        let mut words = line.split_whitespace();
+        let keyword = words.next().unwrap_or("");
+        let three = |words: std::str::SplitWhitespace| -> Result<[f64; 3], SceneError> {
+            let nums: Vec<f64> = words
+                .map(|w| w.parse::<f64>())
+                .collect::<Result<_, _>>()
+                .map_err(|_| syntax(at(line_no), format!("cannot parse '{line}'")))?;
+            <[f64; 3]>::try_from(nums).map_err(|_| {
+                syntax(
+                    at(line_no),
+                    format!("'{line}': {keyword} needs exactly three numbers (r g b)"),
+                )
+            })
+        };
+        match keyword {
+            "newmtl" => {
+                if let Some(p) = current.take() {
+                    out.push(close(p)?);
+                }
+                let name = rest(line, keyword);
+                if name.is_empty() {
+                    return Err(syntax(at(line_no), "newmtl without a name"));
+                }
+                current = Some(Pending {
+                    name: name.into(),
+                    line: line_no,
+                    kd: None,
+                    ke: None,
+                });
+            }
+            "Kd" | "Ke" | "Ka" | "Ks" => {
+                let v = three(words)?;
+                let Some(p) = current.as_mut() else {
+                    return Err(syntax(at(line_no), format!("{keyword} before any newmtl")));
+                };
+                match keyword {
+                    "Kd" => p.kd = Some((v, line_no)),
+                    "Ke" => p.ke = Some((v, line_no)),
+                    _ => {}
+                }
+            }
+            _ => {}
+        }
+    }
+    if let Some(p) = current.take() {
+        out.push(close(p)?);
+    }
+    Ok(out)
+}
+
+/// Runs tobj on the scanned text and pairs its triangles, in order, with the
+/// fans of the scanned faces, checking group, material and positions.
+fn match_tobj(
+    file: &str,
+    text: &str,
+    libs: &HashMap<String, String>,
+    faces: &[ScanFace],
+    positions: &[DVec3],
+    materials: &[Material],
+) -> Result<Vec<RawTriangle>, SceneError> {
+    let reader_error = |at: String, message: String| SceneError::Reader { at, message };
+    // More fields exist when tobj's optional features are on, hence the update.
+    #[allow(clippy::needless_update)]
+    let options = tobj::LoadOptions {
+        single_index: true,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    let (models, tobj_materials) =
+        tobj::load_obj_buf(&mut text.as_bytes(), &options, |p| {
+            match libs.get(p.to_string_lossy().as_ref()) {
+                Some(t) => tobj::load_mtl_buf(&mut t.as_bytes()),
+                None => Err(tobj::LoadError::OpenFileFailed),
+            }
+        })
+        .map_err(|e| reader_error(file.into(), e.to_string()))?;
+    let tobj_materials = tobj_materials.map_err(|e| reader_error(file.into(), e.to_string()))?;
+
+    let expected = faces.iter().flat_map(|f| {
+        (1..f.vertices.len() - 1)
+            .map(move |i| (f, [f.vertices[0], f.vertices[i], f.vertices[i + 1]]))
+    });
+    let mut expected = expected.peekable();
+    let mut out = Vec::new();
+    for model in &models {
+        let mesh = &model.mesh;
+        let mat_name = mesh
+            .material_id
+            .and_then(|id| tobj_materials.get(id))
+            .map(|m| m.name.as_str());
+        for tri in mesh.indices.chunks_exact(3) {
+            let Some((face, idx)) = expected.next() else {
+                return Err(reader_error(
+                    file.into(),
+                    format!(
+                        "tobj read more triangles than the file's faces give (group '{}')",
+                        model.name
+                    ),
+                ));
+            };
+            let at = format!("{file}:{}", face.line);
+            if model.name != face.group || mat_name != Some(materials[face.material].name.as_str())
+            {
+                return Err(reader_error(
+                    at,
+                    format!(
+                        "tobj assigns this face to group '{}' material {:?}, the line scan to '{}' material '{}'",
+                        model.name, mat_name, face.group, materials[face.material].name
+                    ),
+                ));
+            }
+            let vertices = idx.map(|v| positions[v]);
+            for (c, &ti) in tri.iter().enumerate() {
+                let p = &mesh.positions[3 * ti as usize..3 * ti as usize + 3];
+                let ours = vertices[c].to_array();
+                let agree = (0..3).all(|d| (p[d] as f64 - ours[d]).abs() <= 1e-6 * ours[d].abs());
+                if !agree {
+                    return Err(reader_error(
+                        at,
+                        format!("tobj reads vertex {c} as {p:?}, the line scan as {ours:?}"),
+                    ));
+                }
+            }
+            out.push(RawTriangle {
+                group: face.group.clone(),
+                material: face.material,
+                vertices,
+                at,
+            });
+        }
+    }
+    if let Some((face, _)) = expected.peek() {
+        return Err(reader_error(
+            format!("{file}:{}", face.line),
+            "tobj read fewer triangles than the file's faces give".into(),
+        ));
+    }
+    Ok(out)
+}

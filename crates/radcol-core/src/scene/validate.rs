@@ -1,0 +1,348 @@
+//! Shared checks and repairs of every scene input: triangles with their origin
+//! (file:line or group/face) become a [`Scene`], or a [`SceneError`].
+
+use super::{Material, Scene, SceneError, MAX_WARNINGS_PER_KIND};
+use crate::camera::Camera;
+use crate::geometry::{Identity, Patch, Surface};
+use crate::visibility::is_convex_enclosure;
+use glam::DVec3;
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// One input triangle before checks.
+#[derive(Clone, Debug)]
+pub(crate) struct RawTriangle {
+    /// Group (OBJ `g`/`o`, builder mesh name).
+    pub group: String,
+    /// Index into the scene's materials.
+    pub material: usize,
+    /// World positions, front face counter-clockwise.
+    pub vertices: [DVec3; 3],
+    /// Where it came from, for messages ("a.obj:12", "mesh 'floor' face 3").
+    pub at: String,
+}
+
+/// Everything a loader gathered, before the shared checks.
+#[derive(Debug)]
+pub(crate) struct RawScene {
+    pub name: String,
+    pub materials: Vec<Material>,
+    pub triangles: Vec<RawTriangle>,
+    pub camera: Option<Camera>,
+    pub warnings: Vec<String>,
+    pub source: Option<PathBuf>,
+}
+
+/// Collects warnings of one kind, listing the first few and counting the rest.
+struct Capped<'a> {
+    out: &'a mut Vec<String>,
+    kind: &'static str,
+    count: usize,
+}
+
+impl<'a> Capped<'a> {
+    fn new(out: &'a mut Vec<String>, kind: &'static str) -> Self {
+        Self {
+            out,
+            kind,
+            count: 0,
+        }
+    }
+    fn push(&mut self, message: String) {
+        if self.count < MAX_WARNINGS_PER_KIND {
+            self.out.push(message);
+        }
+        self.count += 1;
+    }
+}
+
+impl Drop for Capped<'_> {
+    fn drop(&mut self) {
+        if self.count > MAX_WARNINGS_PER_KIND {
+            self.out.push(format!(
+                "... and {} more {} warnings",
+                self.count - MAX_WARNINGS_PER_KIND,
+                self.kind
+            ));
+        }
+    }
+}
+
+/// Bit pattern of a position, for exact hashing.
+fn key(v: DVec3) -> [u64; 3] {
+    v.to_array().map(|x| (x + 0.0).to_bits())
+}
+
+/// The triangle's cyclic order started at its smallest vertex: equal for the
+/// same triangle in the same orientation.
+fn oriented_key(t: &[DVec3; 3]) -> [[u64; 3]; 3] {
+    let k = t.map(key);
+    let i = (0..3).min_by_key(|&i| k[i]).unwrap_or(0);
+    [k[i], k[(i + 1) % 3], k[(i + 2) % 3]]
+}
+
+/// Checks materials (ρ in [0, 1), E finite and ≥ 0); `at(i)` names material `i`.
+pub(crate) fn check_material(m: &Material, at: &str) -> Result<(), SceneError> {
+    const C: [&str; 3] = ["R", "G", "B"];
+    for c in 0..3 {
+        if !(0.0..1.0).contains(&m.rho[c]) {
+            return Err(SceneError::Reflectance {
+                at: at.into(),
+                material: m.name.clone(),
+                component: C[c],
+                value: m.rho[c],
+            });
+        }
+        if !(m.emission[c].is_finite() && m.emission[c] >= 0.0) {
+            return Err(SceneError::Emission {
+                at: at.into(),
+                material: m.name.clone(),
+                component: C[c],
+                value: m.emission[c],
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Runs the shared repairs and warnings and builds the scene.
+pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
+    let RawScene {
+        name,
+        materials,
+        triangles,
+        camera,
+        mut warnings,
+        source,
+    } = raw;
+    if triangles.is_empty() {
+        return Err(SceneError::Empty {
+            name,
+            detail: String::new(),
+        });
+    }
+    if let Some(c) = &camera {
+        c.validate().map_err(|message| SceneError::Camera {
+            name: name.clone(),
+            message,
+        })?;
+    }
+    let (lo, hi) = triangles.iter().flat_map(|t| t.vertices).fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), v| (lo.min(v), hi.max(v)),
+    );
+    let scale = (hi - lo).length();
+
+    // Degenerate and duplicate triangles.
+    let mut kept: Vec<RawTriangle> = Vec::with_capacity(triangles.len());
+    let mut seen: HashMap<[[u64; 3]; 3], usize> = HashMap::new();
+    let mut degenerate = 0;
+    {
+        let mut deg = Capped::new(&mut warnings, "degenerate-triangle");
+        let mut dup_list = Vec::new();
+        for t in triangles {
+            let [a, b, c] = t.vertices;
+            let area = 0.5 * (b - a).cross(c - a).length();
+            if area.is_nan() || area <= 1e-12 * scale * scale {
+                deg.push(format!(
+                    "{}: degenerate triangle (area {area:e}, scene diagonal {scale:e}) dropped",
+                    t.at
+                ));
+                degenerate += 1;
+                continue;
+            }
+            match seen.entry(oriented_key(&t.vertices)) {
+                std::collections::hash_map::Entry::Occupied(e) => {
+                    dup_list.push(format!(
+                        "{}: duplicate of the triangle at {} (same vertices, same orientation) dropped",
+                        t.at,
+                        kept[*e.get()].at
+                    ));
+                }
+                std::collections::hash_map::Entry::Vacant(e) => {
+                    e.insert(kept.len());
+                    kept.push(t);
+                }
+            }
+        }
+        drop(deg);
+        let mut dup = Capped::new(&mut warnings, "duplicate-triangle");
+        for m in dup_list {
+            dup.push(m);
+        }
+    }
+    if kept.is_empty() {
+        return Err(SceneError::Empty {
+            name,
+            detail: format!(" after dropping {degenerate} degenerate triangles"),
+        });
+    }
+
+    let tris: Vec<[DVec3; 3]> = kept.iter().map(|t| t.vertices).collect();
+    non_manifold_edges(&tris, &kept, &mut warnings);
+    t_junctions(&tris, &kept, scale, &mut warnings);
+
+    // One patch per (group, material), in order of first appearance.
+    let mut patch_of: HashMap<(String, usize), usize> = HashMap::new();
+    let mut patches: Vec<Patch> = Vec::new();
+    let mut patch_material = Vec::new();
+    for t in &kept {
+        let j = *patch_of
+            .entry((t.group.clone(), t.material))
+            .or_insert_with(|| {
+                patches.push(Patch {
+                    name: format!("{}/{}", t.group, materials[t.material].name),
+                    map: Arc::new(Identity),
+                    triangles: Vec::new(),
+                });
+                patch_material.push(t.material);
+                patches.len() - 1
+            });
+        patches[j].triangles.push(t.vertices);
+    }
+    let surface = Surface {
+        name: name.clone(),
+        patches,
+        convex_enclosure: is_convex_enclosure(&tris),
+    };
+    Ok(Scene {
+        name,
+        surface: Arc::new(surface),
+        materials,
+        patch_material,
+        camera,
+        warnings,
+        source,
+    })
+}
+
+/// Warns about edges shared by more than two triangles (hashing sorted
+/// endpoints); a two-sided panel's coincident pair counts once.
+fn non_manifold_edges(tris: &[[DVec3; 3]], raw: &[RawTriangle], warnings: &mut Vec<String>) {
+    type Edge = (DVec3, DVec3, Vec<usize>);
+    let mut edges: HashMap<([u64; 3], [u64; 3]), Edge> = HashMap::new();
+    for (i, t) in tris.iter().enumerate() {
+        for e in 0..3 {
+            let (p, q) = (t[e], t[(e + 1) % 3]);
+            let (a, b) = (key(p), key(q));
+            edges
+                .entry(if a < b { (a, b) } else { (b, a) })
+                .or_insert_with(|| (p, q, Vec::new()))
+                .2
+                .push(i);
+        }
+    }
+    // The two sides of a two-sided panel are one sheet: count distinct
+    // unoriented triangles per edge.
+    let sheet = |i: usize| {
+        let mut k = tris[i].map(key);
+        k.sort();
+        k
+    };
+    let sheets = |faces: &[usize]| {
+        let mut k: Vec<_> = faces.iter().map(|&i| sheet(i)).collect();
+        k.sort();
+        k.dedup();
+        k.len()
+    };
+    let mut bad: Vec<&Edge> = edges.values().filter(|e| sheets(&e.2) > 2).collect();
+    bad.sort_by(|x, y| x.2.cmp(&y.2));
+    let mut w = Capped::new(warnings, "non-manifold-edge");
+    for (a, b, faces) in bad {
+        let names: Vec<&str> = faces.iter().map(|&i| raw[i].at.as_str()).collect();
+        w.push(format!(
+            "non-manifold edge ({:.6}, {:.6}, {:.6})-({:.6}, {:.6}, {:.6}) shared by {} triangles: {}",
+            a.x,
+            a.y,
+            a.z,
+            b.x,
+            b.y,
+            b.z,
+            faces.len(),
+            names.join(", ")
+        ));
+    }
+}
+
+/// Warns about vertices lying inside another triangle's edge. Vertices go in a
+/// uniform grid of cell size h (the mean edge length); each edge is walked in
+/// steps of h and tests the vertices in the 27 cells around each step, so the
+/// cost is O(n) for meshes of comparable edge lengths.
+fn t_junctions(tris: &[[DVec3; 3]], raw: &[RawTriangle], scale: f64, warnings: &mut Vec<String>) {
+    let mut first_face: HashMap<[u64; 3], usize> = HashMap::new();
+    let mut verts: Vec<DVec3> = Vec::new();
+    let mut vert_face: Vec<usize> = Vec::new();
+    type Edge = (DVec3, DVec3, usize);
+    let mut edges: HashMap<([u64; 3], [u64; 3]), Edge> = HashMap::new();
+    let mut total_len = 0.0;
+    for (i, t) in tris.iter().enumerate() {
+        for e in 0..3 {
+            let v = t[e];
+            first_face.entry(key(v)).or_insert_with(|| {
+                verts.push(v);
+                vert_face.push(i);
+                i
+            });
+            let (p, q) = (t[e], t[(e + 1) % 3]);
+            let (a, b) = (key(p), key(q));
+            let k = if a < b { (a, b) } else { (b, a) };
+            edges.entry(k).or_insert_with(|| {
+                total_len += (q - p).length();
+                (p, q, i)
+            });
+        }
+    }
+    let h = total_len / edges.len().max(1) as f64;
+    if h.is_nan() || h <= 0.0 || !h.is_finite() {
+        return;
+    }
+    let tol = 1e-9 * scale;
+    let cell = |p: DVec3| -> [i64; 3] { (p / h).floor().to_array().map(|x| x as i64) };
+    let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+    for (i, &v) in verts.iter().enumerate() {
+        grid.entry(cell(v)).or_default().push(i);
+    }
+    let mut found: Vec<(usize, usize, DVec3)> = Vec::new();
+    let mut sorted_edges: Vec<_> = edges.into_values().collect();
+    sorted_edges.sort_by_key(|e| e.2);
+    for (p, q, face) in sorted_edges {
+        let d = q - p;
+        let len2 = d.length_squared();
+        let steps = ((len2.sqrt() / h).ceil() as usize).max(1);
+        let mut tested: Vec<usize> = Vec::new();
+        for s in 0..=steps {
+            let c = cell(p + d * (s as f64 / steps as f64));
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        let Some(list) = grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else {
+                            continue;
+                        };
+                        for &vi in list {
+                            if tested.contains(&vi) {
+                                continue;
+                            }
+                            tested.push(vi);
+                            let v = verts[vi];
+                            let t = (v - p).dot(d) / len2;
+                            let off = (p + d * t - v).length();
+                            let inside = t * len2.sqrt() > tol && (1.0 - t) * len2.sqrt() > tol;
+                            if inside && off <= tol {
+                                found.push((vert_face[vi], face, v));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    found.sort_by_key(|f| (f.1, f.0));
+    let mut w = Capped::new(warnings, "T-junction");
+    for (vf, ef, v) in found {
+        w.push(format!(
+            "T-junction: vertex ({:.6}, {:.6}, {:.6}) of the triangle at {} lies inside an edge of the triangle at {}",
+            v.x, v.y, v.z, raw[vf].at, raw[ef].at
+        ));
+    }
+}
