@@ -1,1 +1,0 @@
-//! Rendering and per-vertex read-back of solutions.

@@ -1,0 +1,346 @@
+//! Tests of ray queries, rendering and the vertex read-back against closed forms.
+
+use super::*;
+use crate::discretization::Discretization;
+use crate::geometry::shapes::{box_room, sphere};
+use crate::geometry::{Patch, Surface};
+use crate::nodes::NodeSet;
+use glam::DVec3;
+use std::sync::Arc;
+
+const L: [f64; 3] = [2.0, 3.0, 1.5];
+
+fn room(level: u32) -> Arc<Mesh> {
+    Arc::new(Mesh::new(Arc::new(box_room(L[0], L[1], L[2])), level))
+}
+
+/// u_n interpolating `f` at the nodes of degree `r` (exact when f is a polynomial of degree ≤ r).
+fn interpolate(mesh: &Arc<Mesh>, r: usize, f: impl Fn(DVec3) -> f64) -> Solution {
+    let disc = Arc::new(Discretization::new(
+        mesh.clone(),
+        NodeSet::new(r, 0.1).unwrap(),
+    ));
+    let values = disc.points().iter().map(|p| f(p.position)).collect();
+    Solution::new(disc, values)
+}
+
+/// The affine element map from the element's vertices: v0 + s (v1 - v0) + t (v2 - v0).
+fn affine(mesh: &Mesh, k: usize, s: f64, t: f64) -> DVec3 {
+    let [a, b, c] = mesh.vertices(k);
+    a + s * (b - a) + t * (c - a)
+}
+
+/// Where a ray from inside the box [0, L] leaves it (closed form).
+fn exit_box(o: DVec3, d: DVec3) -> DVec3 {
+    let mut t = f64::INFINITY;
+    for i in 0..3 {
+        if d[i] > 0.0 {
+            t = t.min((L[i] - o[i]) / d[i]);
+        } else if d[i] < 0.0 {
+            t = t.min(-o[i] / d[i]);
+        }
+    }
+    o + t * d
+}
+
+/// Rays from inside the room to known points of each element hit that element
+/// at its (s, t), at t = 1, on the front; from outside, on the back.
+#[test]
+fn hits_land_at_element_and_st() {
+    let mesh = room(2);
+    let bvh = ElementBvh::new(&mesh, 4);
+    assert_eq!(bvh.facet_count(), mesh.len());
+    let o = DVec3::new(0.7, 1.1, 0.6);
+    for k in 0..mesh.len() {
+        for (s, t) in [(0.2, 0.3), (0.6, 0.1), (0.05, 0.9)] {
+            let p = affine(&mesh, k, s, t);
+            let hit = bvh.closest_hit(o, p - o).expect("hit");
+            assert_eq!(hit.element, k);
+            assert!(
+                (hit.st[0] - s).abs() < 1e-12 && (hit.st[1] - t).abs() < 1e-12,
+                "{hit:?}"
+            );
+            assert!((hit.t - 1.0).abs() < 1e-12);
+            assert!(hit.front);
+            // From just outside the wall, along the inner normal: the back face.
+            let n = mesh.point(k, s, t).normal;
+            let outside = p - 0.25 * n;
+            let back = bvh.closest_hit(outside, p - outside).expect("hit");
+            assert_eq!(back.element, k);
+            assert!(!back.front);
+            assert!((back.t - 1.0).abs() < 1e-12);
+            // Pointing away from the room misses.
+            assert!(bvh.closest_hit(outside, outside - p).is_none());
+        }
+    }
+}
+
+/// Rays through vertices and edges shared by several elements (box corners, edge
+/// midpoints) still hit: no ray slips between facets.
+#[test]
+fn rays_through_shared_edges_and_corners_hit() {
+    let mesh = room(1);
+    let bvh = ElementBvh::new(&mesh, 4);
+    let o = DVec3::new(1.0, 1.5, 0.75);
+    for k in 0..mesh.len() {
+        for (s, t) in [
+            (0.0, 0.0),
+            (1.0, 0.0),
+            (0.0, 1.0),
+            (0.5, 0.0),
+            (0.5, 0.5),
+            (0.0, 0.5),
+        ] {
+            let p = affine(&mesh, k, s, t);
+            let hit = bvh
+                .closest_hit(o, p - o)
+                .expect("ray through a shared vertex or edge");
+            assert!((hit.t - 1.0).abs() < 1e-12);
+            let q = affine(&mesh, hit.element, hit.st[0], hit.st[1]);
+            assert!((q - p).length() < 1e-12, "{p} vs {q}");
+        }
+    }
+}
+
+/// A room far from the origin, seen from far away: f32 boxes with f64 tests still
+/// find every hit at the exact place.
+#[test]
+fn far_from_origin() {
+    let shift = DVec3::new(1.0e5, -2.0e5, 3.0e4);
+    let mut surface = box_room(L[0], L[1], L[2]);
+    for p in &mut surface.patches {
+        for tri in &mut p.triangles {
+            *tri = tri.map(|v| v + shift);
+        }
+    }
+    let shifted: Vec<Patch> = surface.patches.clone();
+    let mesh = Mesh::new(
+        Arc::new(Surface {
+            patches: shifted,
+            ..surface
+        }),
+        2,
+    );
+    let bvh = ElementBvh::new(&mesh, 1);
+    let eye = shift + DVec3::new(-3.0e3, 1.0e3, 2.0e3);
+    let mut front = 0;
+    for k in 0..mesh.len() {
+        let p = affine(&mesh, k, 0.25, 0.25);
+        let hit = bvh.closest_hit(eye, p - eye).expect("hit");
+        // The first surface along the ray may be another wall, but never beyond p.
+        assert!(hit.t <= 1.0 + 1e-12);
+        if hit.element == k {
+            assert!((hit.st[0] - 0.25).abs() < 1e-9 && (hit.st[1] - 0.25).abs() < 1e-9);
+        }
+        // From outside, everything seen is a back face.
+        assert!(!hit.front);
+        front += hit.front as usize;
+    }
+    assert_eq!(front, 0);
+}
+
+/// On a sphere (curved elements cut into facets), a ray from the centre towards
+/// m_k(s, t) hits element k, at a point within one facet diameter of m_k(s, t).
+#[test]
+fn curved_elements_map_back() {
+    let mesh = Mesh::new(Arc::new(sphere(1.0)), 1);
+    let n = 8;
+    let bvh = ElementBvh::new(&mesh, n);
+    assert_eq!(bvh.facet_count(), mesh.len() * (n * n) as usize);
+    for k in 0..mesh.len() {
+        let [a, b, c] = mesh.vertices(k);
+        let facet = (b - a).length().max((c - a).length()).max((c - b).length()) / n as f64;
+        let p = mesh.position(k, 0.3, 0.35);
+        let hit = bvh.closest_hit(DVec3::ZERO, p).expect("hit");
+        assert_eq!(hit.element, k);
+        assert!(hit.front);
+        let q = mesh.position(k, hit.st[0], hit.st[1]);
+        assert!((q - p).length() < facet, "{} vs {facet}", (q - p).length());
+    }
+}
+
+/// A constant solution renders as the constant radiance u / π on every pixel of
+/// a view from inside the room (every pixel covered).
+#[test]
+fn constant_solution_renders_constant() {
+    let mesh = room(1);
+    let u = interpolate(&mesh, 1, |_| 2.0);
+    let camera = Camera::parse("0.3,0.4,0.5, 1.8,2.5,1.2, 0,0,1, 100").unwrap();
+    let opts = RenderOptions {
+        width: 40,
+        height: 30,
+        samples: 2,
+        background: [9.0; 3],
+        curved_subdivisions: 1,
+    };
+    let img = render(&mesh, &[&u], &camera, &opts).unwrap();
+    assert_eq!(img.rgb.len(), 1200);
+    let want = (2.0 / std::f64::consts::PI) as f32;
+    for (px, cov) in img.rgb.iter().zip(&img.coverage) {
+        assert_eq!(*cov, 1.0);
+        for c in px {
+            assert!(
+                (c - want).abs() <= 2.0 * f32::EPSILON * want,
+                "{c} vs {want}"
+            );
+        }
+    }
+}
+
+/// Seen from outside, the room's walls turn their backs to the camera: covered
+/// pixels are black, uncovered ones the background.
+#[test]
+fn back_faces_black_misses_background() {
+    let mesh = room(1);
+    let u = interpolate(&mesh, 0, |_| 5.0);
+    let camera = Camera::parse("1,-6,0.75, 1,1.5,0.75, 0,0,1, 30").unwrap();
+    let bg = [0.1, 0.2, 0.3];
+    let opts = RenderOptions {
+        width: 21,
+        height: 15,
+        samples: 3,
+        background: bg,
+        curved_subdivisions: 1,
+    };
+    let img = render(&mesh, &[&u], &camera, &opts).unwrap();
+    let centre = 7 * 21 + 10;
+    assert_eq!(img.coverage[centre], 1.0);
+    assert_eq!(img.rgb[centre], [0.0; 3]);
+    assert_eq!(img.coverage[0], 0.0);
+    assert_eq!(img.rgb[0], bg);
+    for (px, &cov) in img.rgb.iter().zip(&img.coverage) {
+        for c in 0..3 {
+            let want = (1.0 - cov) * bg[c];
+            assert!((px[c] - want).abs() < 1e-6);
+        }
+    }
+}
+
+/// Linear-in-space channels (exact in u_n for r ≥ 1) render, at pixel centres, as
+/// the closed form at the ray's exit from the box, divided by π.
+#[test]
+fn linear_solution_matches_closed_form() {
+    let mesh = room(1);
+    let fs: [fn(DVec3) -> f64; 3] = [
+        |p| 1.0 + 0.5 * p.x - 0.3 * p.y + 0.8 * p.z,
+        |p| 2.0 - 0.2 * p.x + 0.1 * p.y,
+        |p| 0.5 + 0.25 * p.z,
+    ];
+    let sols = fs.map(|f| interpolate(&mesh, 1, f));
+    let camera = Camera::parse("0.7,1.1,0.6, 1.9,2.5,0.2, 0,0,1, 80").unwrap();
+    let (w, h) = (32, 24);
+    let opts = RenderOptions {
+        width: w,
+        height: h,
+        samples: 1,
+        background: [0.0; 3],
+        curved_subdivisions: 1,
+    };
+    let img = render(&mesh, &[&sols[0], &sols[1], &sols[2]], &camera, &opts).unwrap();
+    for y in 0..h {
+        for x in 0..w {
+            let d = camera.ray_direction(x as f64 + 0.5, y as f64 + 0.5, w, h);
+            let p = exit_box(camera.eye, d);
+            let got = img.rgb[(y * w + x) as usize];
+            for c in 0..3 {
+                let want = fs[c](p) / std::f64::consts::PI;
+                assert!(
+                    (got[c] as f64 - want).abs() < 1e-6 * want.abs().max(1.0),
+                    "pixel ({x}, {y}) channel {c}: {} vs {want}",
+                    got[c]
+                );
+            }
+        }
+    }
+}
+
+/// Bad input is reported, not panicked on.
+#[test]
+fn errors() {
+    let mesh = room(0);
+    let u = interpolate(&mesh, 0, |_| 1.0);
+    let camera = Camera::parse("1,1,1, 0,0,0, 0,0,1, 60").unwrap();
+    let opts = RenderOptions::default();
+    assert!(matches!(
+        render(&mesh, &[&u, &u], &camera, &opts),
+        Err(RenderError::ChannelCount { count: 2 })
+    ));
+    let finer = room(1);
+    let v = interpolate(&finer, 0, |_| 1.0);
+    assert!(matches!(
+        render(&mesh, &[&u, &v, &u], &camera, &opts),
+        Err(RenderError::MeshMismatch { channel: 1, .. })
+    ));
+    let zero = RenderOptions { width: 0, ..opts };
+    assert!(matches!(
+        render(&mesh, &[&u], &camera, &zero),
+        Err(RenderError::ImageSize { .. })
+    ));
+    let bad = Camera {
+        fov_y_deg: 0.0,
+        ..camera
+    };
+    assert!(matches!(
+        render(&mesh, &[&u], &bad, &opts),
+        Err(RenderError::Camera(_))
+    ));
+    assert!(matches!(
+        vertex_mesh(&mesh, &[&u], 0),
+        Err(RenderError::Subdivisions(0))
+    ));
+}
+
+/// The vertex read-back: vertex values are u_n at the vertex's (s, t), positions
+/// the affine element map there, normals point into the room, triangles cover
+/// each element and their areas add up to the room's 2 (2·3 + 3·1.5 + 2·1.5) = 27.
+#[test]
+fn vertex_mesh_values_and_area() {
+    let mesh = room(1);
+    let u = interpolate(&mesh, 2, |p| 1.0 + p.x * p.y - 0.5 * p.z * p.z);
+    let n = 3;
+    let vm = vertex_mesh(&mesh, &[&u], n).unwrap();
+    let pts = tessellation_points(n);
+    let per = pts.len();
+    assert_eq!(vm.vertex_count(), mesh.len() * per);
+    assert_eq!(vm.triangle_count(), mesh.len() * 9);
+    assert_eq!(vm.element.len(), vm.triangle_count());
+    let centre = DVec3::from(L) * 0.5;
+    for k in 0..mesh.len() {
+        for (j, &[s, t]) in pts.iter().enumerate() {
+            let v = k * per + j;
+            let want = u.eval(k, s, t) as f32;
+            assert_eq!(vm.values[v], [want; 3]);
+            let p = affine(&mesh, k, s, t);
+            let q = DVec3::from(vm.positions[v].map(f64::from));
+            assert!((p - q).length() < 1e-6);
+            let nrm = DVec3::from(vm.normals[v].map(f64::from));
+            assert!((nrm.length() - 1.0).abs() < 1e-6);
+            // The inner normal of a box wall points straight at the centre plane.
+            assert!(nrm.dot(centre - p) > 0.0);
+        }
+    }
+    let mut area = 0.0;
+    let mut per_element = vec![0.0; mesh.len()];
+    for (tri, &k) in vm.indices.chunks(3).zip(&vm.element) {
+        let [a, b, c] =
+            [0, 1, 2].map(|i| DVec3::from(vm.positions[tri[i] as usize].map(f64::from)));
+        // Every triangle uses only its own element's vertices.
+        assert!(tri.iter().all(|&i| i as usize / per == k as usize));
+        let cross = (b - a).cross(c - a);
+        // Counter-clockwise seen from the front: along the vertex normal.
+        assert!(cross.dot(DVec3::from(vm.normals[tri[0] as usize].map(f64::from))) > 0.0);
+        area += 0.5 * cross.length();
+        per_element[k as usize] += 0.5 * cross.length();
+    }
+    assert!((area - 27.0).abs() < 1e-5, "{area}");
+    assert!((area - mesh.area()).abs() < 1e-5);
+    for k in 0..mesh.len() {
+        let [a, b, c] = mesh.vertices(k);
+        assert!((per_element[k] - 0.5 * (b - a).cross(c - a).length()).abs() < 1e-6);
+    }
+    // Three channels come back as three channels.
+    let w = interpolate(&mesh, 0, |_| 3.0);
+    let rgb = vertex_mesh(&mesh, &[&u, &w, &u], 1).unwrap();
+    assert_eq!(rgb.values[0][1], 3.0);
+    assert_eq!(rgb.values[0][0], u.eval(0, 0.0, 0.0) as f32);
+}
