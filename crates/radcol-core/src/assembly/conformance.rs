@@ -6,7 +6,7 @@
 //! point by point through [`ElementIntegrator::apply_rule`] and
 //! [`crate::kernel::g`] instead of the vectorised run loop.
 
-use super::plan::{CLASS_CULLED, CLASS_NEAR, CLASS_SELF};
+use super::plan::{CLASS_CULLED, CLASS_NEAR, CLASS_PARTIAL, CLASS_SELF};
 use super::{AssemblyBackend, AssemblyPlan, CpuBackend, FieldPoint, QuadratureOptions};
 use crate::discretization::Discretization;
 use crate::geometry::shapes::{box_room, ellipsoid, sphere};
@@ -26,10 +26,61 @@ fn plan(surface: Surface, r: usize, level: u32) -> AssemblyPlan {
     AssemblyPlan::new(disc, QuadratureOptions::default())
 }
 
-/// The conformance cases: sphere, ellipsoid (1, 1.5, 0.8) and box room
-/// (1, 2, 1.5) at r = 0..=3, α = 0.1, on small levels.
+/// A room [0, 2]³ (normals in) with a floating cube [0.7, 1.3]³ (normals out):
+/// a flat scene that occludes, so its plans hold partly visible pairs.
+pub fn room_with_cube() -> Surface {
+    let corner = |lo: f64, hi: f64, i: usize| {
+        glam::DVec3::new(
+            if i & 1 == 0 { lo } else { hi },
+            if i & 2 == 0 { lo } else { hi },
+            if i & 4 == 0 { lo } else { hi },
+        )
+    };
+    // Quads counter-clockwise seen from outside the box.
+    let quads = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let patch = |name: &str, lo: f64, hi: f64, inward: bool| {
+        let triangles = quads
+            .iter()
+            .flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]])
+            .map(|t: [usize; 3]| {
+                let t = if inward { [t[0], t[2], t[1]] } else { t };
+                t.map(|i| corner(lo, hi, i))
+            })
+            .collect();
+        crate::geometry::Patch {
+            name: name.into(),
+            map: Arc::new(crate::geometry::Identity),
+            triangles,
+        }
+    };
+    Surface {
+        name: "room with cube".into(),
+        patches: vec![
+            patch("room", 0.0, 2.0, true),
+            patch("cube", 0.7, 1.3, false),
+        ],
+        convex_enclosure: false,
+    }
+}
+
+/// The conformance cases: sphere, ellipsoid (1, 1.5, 0.8), box room
+/// (1, 2, 1.5) at r = 0..=3, α = 0.1, on small levels, and the occluding
+/// [`room_with_cube`] at r = 0, 1 on level 0.
 pub fn conformance_cases() -> Vec<(String, AssemblyPlan)> {
     let mut out = Vec::new();
+    for r in 0..=1usize {
+        out.push((
+            format!("room with cube r={r} level=0"),
+            plan(room_with_cube(), r, 0),
+        ));
+    }
     for r in 0..=3usize {
         let (ls, le, lb) = if r <= 1 { (2, 1, 2) } else { (1, 1, 1) };
         out.push((format!("sphere r={r} level={ls}"), plan(sphere(1.0), r, ls)));
@@ -158,6 +209,17 @@ pub fn generic_matrix(plan: &AssemblyPlan) -> DenseMatrix {
                     CLASS_CULLED => {}
                     CLASS_NEAR | CLASS_SELF => {
                         integrator.integrate(&fp, k, nodes.degree(), &phi, out);
+                    }
+                    CLASS_PARTIAL => {
+                        plan.integrate_partial(
+                            &integrator,
+                            p.position,
+                            p.normal,
+                            p.element,
+                            k,
+                            &phi,
+                            out,
+                        );
                     }
                     code => {
                         let rule = plan.ladder().rule((code - 1) as usize);

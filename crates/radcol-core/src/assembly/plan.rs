@@ -318,6 +318,47 @@ impl AssemblyPlan {
         )
     }
 
+    /// Integrates the basis times G over the part of element `k` visible from
+    /// the point (`position`, `normal`) of element `kp`, for a pair classed
+    /// [`CLASS_PARTIAL`]: the visible region is clipped exactly
+    /// ([`clip::visible_region`]) and each convex piece integrated adaptively.
+    /// Overwrites `out` (f_r values); returns kernel evaluations.
+    ///
+    /// # Panics
+    /// When the pair is not partial.
+    #[allow(clippy::too_many_arguments)]
+    pub fn integrate_partial(
+        &self,
+        integrator: &ElementIntegrator<'_>,
+        position: glam::DVec3,
+        normal: glam::DVec3,
+        kp: usize,
+        k: usize,
+        phi: &super::integrate::Integrand<'_>,
+        out: &mut [f64],
+    ) -> u64 {
+        let occ = self
+            .occluders
+            .as_ref()
+            .expect("partial pairs exist only with occluders");
+        let cands = self.partial[kp].candidates_of(k);
+        let verts = self.disc.mesh().vertices(k);
+        let r = self.disc.nodes().degree();
+        let fp = FieldPoint {
+            position,
+            normal,
+            on_element: None,
+        };
+        out.fill(0.0);
+        let mut evals = 0;
+        for piece in clip::visible_region(position, normal, &verts, occ, cands) {
+            for tri in clip::triangles(&piece) {
+                evals += integrator.integrate_region(&fp, k, tri, r, phi, out);
+            }
+        }
+        evals
+    }
+
     /// Fills the row block of element `kp`: `block` holds its f_r rows of the
     /// geometric matrix (length f_r · N, row-major). Returns kernel evaluations.
     pub fn fill_block(&self, kp: usize, block: &mut [f64], mode: FillMode) -> u64 {
@@ -374,30 +415,18 @@ impl AssemblyPlan {
                     }
                 }
                 CLASS_PARTIAL if mode != FillMode::FarOnly => {
-                    let occ = self
-                        .occluders
-                        .as_ref()
-                        .expect("partial pairs exist only with occluders");
-                    let mesh = self.disc.mesh();
                     for ke in k..end {
-                        let cands = self.partial[kp].candidates_of(ke);
-                        let verts = mesh.vertices(ke);
                         for (row, p) in pts.iter().enumerate() {
                             let out = &mut block[row * ncols + ke * f..row * ncols + (ke + 1) * f];
-                            out.fill(0.0);
-                            let fp = FieldPoint {
-                                position: p.position,
-                                normal: p.normal,
-                                on_element: None,
-                            };
-                            for piece in
-                                clip::visible_region(p.position, p.normal, &verts, occ, cands)
-                            {
-                                for tri in clip::triangles(&piece) {
-                                    evals +=
-                                        integrator.integrate_region(&fp, ke, tri, r, &phi, out);
-                                }
-                            }
+                            evals += self.integrate_partial(
+                                &integrator,
+                                p.position,
+                                p.normal,
+                                kp,
+                                ke,
+                                &phi,
+                                out,
+                            );
                         }
                     }
                 }

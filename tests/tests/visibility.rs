@@ -1,0 +1,298 @@
+//! Occlusion, checked against identities and closed forms.
+//!
+//! * A closed room with a floating cube in it: every ray from a point of the
+//!   scene ends on a front face, so ∫ G V dS_Q = π and each row of the
+//!   geometric matrix sums to 1 (Lemma 1(c) with visibility); with constant ρ
+//!   and E the solution is the constant E / (1 - ρ).
+//! * Energy balance in that closed scene with per-material ρ and E: what is
+//!   emitted is absorbed, ∫ E = ∫ (1 - ρ) K u, up to the discretization error.
+//! * A blocker that hides exactly the half of an emitter beyond a line: the
+//!   receiver's radiosity equals ρ times the closed-form view factor of the
+//!   visible rectangle (Hottel's corner formula with superposition), and is
+//!   half the unblocked value under the blocker's edge.
+//! * The decision whether a scene needs visibility at all.
+
+use glam::DVec3;
+use radcol_core::assembly::{AssemblyBackend, CpuBackend, QuadratureOptions};
+use radcol_core::run::{solve, SolveConfig, SolveOutcome, SolverKind};
+use radcol_core::scene::{Material, Scene, SceneBuilder};
+use radcol_core::visibility::analyze;
+use radcol_tests::assert_close;
+
+/// The 12 triangles of the axis-aligned box [lo, hi], normals pointing out
+/// (`inward` false) or in.
+fn box_mesh(lo: DVec3, hi: DVec3, inward: bool) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let p = |i: u32| {
+        DVec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        )
+    };
+    let positions = (0..8).map(p).collect();
+    // Quads listed counter-clockwise seen from outside.
+    let quads: [[u32; 4]; 6] = [
+        [0, 2, 3, 1], // z = lo
+        [4, 5, 7, 6], // z = hi
+        [0, 1, 5, 4], // y = lo
+        [2, 6, 7, 3], // y = hi
+        [0, 4, 6, 2], // x = lo
+        [1, 3, 7, 5], // x = hi
+    ];
+    let mut tris = Vec::new();
+    for [a, b, c, d] in quads {
+        for t in [[a, b, c], [a, c, d]] {
+            tris.push(if inward { [t[0], t[2], t[1]] } else { t });
+        }
+    }
+    (positions, tris)
+}
+
+/// A 2 × 2 × 2 room with a cube of side 0.6 floating at its centre.
+fn room_with_cube(room: Material, cube: Material) -> Scene {
+    let mut b = SceneBuilder::new("room-with-cube");
+    let mr = b.add_material(room).unwrap();
+    let mc = b.add_material(cube).unwrap();
+    let (p, t) = box_mesh(DVec3::ZERO, DVec3::splat(2.0), true);
+    b.add_mesh_f64("room", &p, &t, mr).unwrap();
+    let (p, t) = box_mesh(DVec3::splat(0.7), DVec3::splat(1.3), false);
+    b.add_mesh_f64("cube", &p, &t, mc).unwrap();
+    b.build().unwrap()
+}
+
+fn cfg(degree: usize, level: u32) -> SolveConfig {
+    SolveConfig {
+        degree,
+        level,
+        solver: SolverKind::Lu,
+        quad: QuadratureOptions {
+            tol: 1e-13,
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
+fn run(scene: &Scene, cfg: &SolveConfig, backend: &dyn AssemblyBackend) -> SolveOutcome {
+    solve(&scene.problem(), cfg, backend).unwrap()
+}
+
+#[test]
+fn closed_room_with_a_cube_has_unit_row_sums_and_the_constant_solution() {
+    let rho = [0.3, 0.6, 0.9];
+    let e = [1.0, 2.0, 0.5];
+    let m = |name: &str| Material::emitter(name, rho, e);
+    let scene = room_with_cube(m("walls"), m("cube"));
+    assert!(analyze(&scene.surface).needed);
+    for (r, level) in [(0, 1), (1, 1), (2, 0)] {
+        let out = run(&scene, &cfg(r, level), &CpuBackend);
+        assert!(out.plan.pairs_partial > 0, "the cube must cast shadows");
+        let mut worst = 0.0f64;
+        for i in 0..out.matrix.nrows() {
+            let row_sum: f64 = out.matrix.row(i).iter().sum();
+            worst = worst.max((row_sum - 1.0).abs());
+            assert_close(&format!("r={r} row sum"), i, row_sum, 1.0, 1e-11);
+        }
+        for (c, ch) in out.channels.iter().enumerate() {
+            let exact = e[c] / (1.0 - rho[c]);
+            for (i, &u) in ch.solution.nodal().iter().enumerate() {
+                assert_close(&format!("r={r} u_{}", ch.name), i, u, exact, 1e-9 * exact);
+            }
+        }
+        println!(
+            "r = {r}, level {level}: {} unknowns, max |row sum - 1| = {worst:.2e}, {:?}",
+            out.matrix.nrows(),
+            out.plan
+        );
+    }
+}
+
+#[test]
+fn closed_room_with_a_cube_balances_energy() {
+    // A bright cube in a dim room: emission only on the cube.
+    let scene = room_with_cube(
+        Material::diffuse("walls", [0.8, 0.5, 0.2]),
+        Material::emitter("cube", [0.4, 0.4, 0.4], [1.0, 1.0, 1.0]),
+    );
+    let mut previous = [f64::INFINITY; 3];
+    // Measured: 9.4e-2 .. 1.1e-1 at level 0, 4.6e-3 .. 5.1e-3 at level 2,
+    // 3.9e-4 .. 9.3e-4 at level 3 (the edges where walls meet and the cube's
+    // shadow boundaries limit the rate).
+    for level in 0..=2 {
+        let out = run(&scene, &cfg(1, level), &CpuBackend);
+        for (c, ch) in out.channels.iter().enumerate() {
+            // Irradiance H = K u at the nodes (the geometric matrix holds the
+            // 1/π); a fraction 1 - ρ of it is absorbed.
+            let u = ch.solution.nodal();
+            let mut h = vec![0.0; u.len()];
+            out.matrix.matvec(u, &mut h);
+            let absorbed: Vec<f64> = h.iter().zip(&ch.rho).map(|(h, r)| (1.0 - r) * h).collect();
+            let absorbed = radcol_core::solution::integrate_nodal(&out.discretization, &absorbed);
+            let imbalance = (absorbed - ch.integral_e).abs() / ch.integral_e;
+            println!(
+                "level {level} {}: emitted {:.12}, absorbed {:.12}, relative imbalance {imbalance:.3e}",
+                ch.name, ch.integral_e, absorbed
+            );
+            assert!(
+                imbalance < 0.2,
+                "level {level} {}: {imbalance:.3e}",
+                ch.name
+            );
+            if level == 2 {
+                assert!(imbalance < 1e-2, "level 2 {}: {imbalance:.3e}", ch.name);
+            }
+            assert!(
+                imbalance < previous[c],
+                "the imbalance is a discretization error and must shrink with h"
+            );
+            previous[c] = imbalance;
+        }
+    }
+}
+
+/// ∫ over the rectangle [x1, x2] × [y1, y2] at height h of cosθ cosθ' / (π r²),
+/// seen from the origin facing up: Hottel's corner formula
+/// F(a, b) = (1/2π) [a/√(1+a²) atan(b/√(1+a²)) + b/√(1+b²) atan(a/√(1+b²))]
+/// (odd in a and b), combined by inclusion–exclusion.
+fn view_factor(x1: f64, x2: f64, y1: f64, y2: f64, h: f64) -> f64 {
+    let corner = |x: f64, y: f64| {
+        let (a, b) = (x / h, y / h);
+        let (sa, sb) = ((1.0 + a * a).sqrt(), (1.0 + b * b).sqrt());
+        (a / sa * (b / sa).atan() + b / sb * (a / sb).atan()) / (2.0 * std::f64::consts::PI)
+    };
+    corner(x2, y2) - corner(x1, y2) - corner(x2, y1) + corner(x1, y1)
+}
+
+/// The closed form against composite Simpson quadrature of the integrand
+/// h² / (π (x² + y² + h²)²), on rectangles in every position relative to the
+/// foot of the perpendicular.
+#[test]
+fn view_factor_closed_form_matches_quadrature() {
+    let simpson = |x1: f64, x2: f64, y1: f64, y2: f64, h: f64| {
+        let n = 400;
+        let w = |i: usize| match i {
+            0 => 1.0,
+            i if i == n => 1.0,
+            i if i % 2 == 1 => 4.0,
+            _ => 2.0,
+        };
+        let (dx, dy) = ((x2 - x1) / n as f64, (y2 - y1) / n as f64);
+        let mut sum = 0.0;
+        for i in 0..=n {
+            for j in 0..=n {
+                let (x, y) = (x1 + i as f64 * dx, y1 + j as f64 * dy);
+                let d = x * x + y * y + h * h;
+                sum += w(i) * w(j) * h * h / (std::f64::consts::PI * d * d);
+            }
+        }
+        sum * dx * dy / 9.0
+    };
+    for (x1, x2, y1, y2, h) in [
+        (-1.0, 1.0, -1.0, 1.0, 1.0),
+        (-0.3, 1.7, -1.0, 0.4, 0.8),
+        (0.5, 2.0, 0.25, 1.0, 1.0),
+        (-2.0, -0.5, -1.0, 1.0, 0.5),
+    ] {
+        let want = simpson(x1, x2, y1, y2, h);
+        let got = view_factor(x1, x2, y1, y2, h);
+        assert!((got - want).abs() < 1e-9, "{got} vs {want}");
+    }
+    // The whole plane is seen whole.
+    assert!((view_factor(-1e8, 1e8, -1e8, 1e8, 1.0) - 1.0).abs() < 1e-7);
+}
+
+#[test]
+fn a_blocker_hides_the_closed_form_part_of_the_light() {
+    let (a, h, rho) = (1.0, 1.0, 0.5);
+    let mut b = SceneBuilder::new("blocker");
+    let light = b
+        .add_material(Material::emitter("light", [0.0; 3], [1.0; 3]))
+        .unwrap();
+    let floor = b
+        .add_material(Material::diffuse("floor", [rho; 3]))
+        .unwrap();
+    let black = b
+        .add_material(Material::diffuse("black", [0.0; 3]))
+        .unwrap();
+    let square = |z: f64, x0: f64, x1: f64, y0: f64, y1: f64| {
+        vec![
+            DVec3::new(x0, y0, z),
+            DVec3::new(x1, y0, z),
+            DVec3::new(x1, y1, z),
+            DVec3::new(x0, y1, z),
+        ]
+    };
+    let up = [[0, 1, 2], [0, 2, 3]];
+    let down = [[0, 2, 1], [0, 3, 2]];
+    b.add_mesh_f64("light", &square(h, -a, a, -a, a), &down, light)
+        .unwrap();
+    b.add_mesh_f64("floor", &square(0.0, -a, a, -a, a), &up, floor)
+        .unwrap();
+    // Half-plane x ≥ 0 at mid-height, wide enough that a segment from the
+    // floor to the light crosses it exactly when x_P + x_Q ≥ 0.
+    b.add_mesh_f64(
+        "blocker",
+        &square(0.5 * h, 0.0, 3.0, -3.0, 3.0),
+        &down,
+        black,
+    )
+    .unwrap();
+    let scene = b.build().unwrap();
+    assert!(analyze(&scene.surface).needed);
+
+    let mut outs = vec![("cpu", run(&scene, &cfg(2, 2), &CpuBackend))];
+    // The GPU backend must honour visibility too (partly visible pairs are
+    // integrated on the CPU while the device fills the far pairs).
+    if let Some(ctx) = radcol_gpu::testing::test_context("blocker") {
+        let gpu = radcol_gpu::GpuBackend::new(ctx, radcol_gpu::Precision::Auto).unwrap();
+        outs.push(("gpu", run(&scene, &cfg(2, 2), &gpu)));
+    }
+    for (name, out) in &outs {
+        let u = out.channels[0].solution.nodal();
+        let mut checked = 0;
+        let mut worst = 0.0f64;
+        for (i, p) in out.discretization.points().iter().enumerate() {
+            let x = p.position;
+            if x.z.abs() > 1e-12 {
+                continue;
+            }
+            let visible = view_factor(-a - x.x, (-x.x).min(a) - x.x, -a - x.y, a - x.y, h);
+            let want = rho * visible;
+            let tol = if out.backend.precision == "f64" {
+                1e-10
+            } else {
+                1e-5
+            };
+            worst = worst.max((u[i] - want).abs());
+            assert_close(&format!("{name} floor u"), i, u[i], want, tol);
+            checked += 1;
+        }
+        println!("{name}: {checked} floor nodes, max |u - ρ F_visible| = {worst:.2e}");
+        assert!(checked > 0);
+    }
+
+    // Under the blocker's edge exactly half of the light is seen.
+    let full = view_factor(-a, a, -a, a, h);
+    let half = view_factor(-a, 0.0, -a, a, h);
+    assert!((half / full - 0.5).abs() < 1e-15);
+}
+
+#[test]
+fn unoccluded_scenes_are_recognised() {
+    use radcol_core::geometry::shapes::{box_room, ellipsoid, sphere};
+    for s in [
+        sphere(1.0),
+        ellipsoid(1.0, 2.0, 0.5),
+        box_room(1.0, 2.0, 3.0),
+    ] {
+        assert!(!analyze(&s).needed, "{}", s.name);
+    }
+    for (name, needed) in [("room", false), ("plates", false), ("cornell", true)] {
+        let scene = radcol_core::scene::builtin(name).unwrap().unwrap();
+        let v = analyze(&scene.surface);
+        assert_eq!(v.needed, needed, "{name}: {}", v.reason);
+    }
+    let m = Material::diffuse("m", [0.5; 3]);
+    let with_cube = room_with_cube(m.clone(), m);
+    assert!(analyze(&with_cube.surface).needed);
+}
