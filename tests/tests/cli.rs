@@ -273,7 +273,7 @@ fn solve_writes_csv_and_refuses_to_overwrite() {
             txt.to_str().unwrap(),
         ],
         2,
-        &["only .csv output for now"],
+        &["unknown file type", ".csv, .ply, .glb, .gltf, .png or .exr"],
     );
     assert!(!txt.exists());
 }
@@ -429,10 +429,15 @@ fn info_reports_mesh_and_memory() {
     assert_eq!(v["patches"], 6);
     assert_eq!(v["unknowns"], 48 * 6);
     assert!((num(&v, "area") - 22.0).abs() < 1e-12);
-    assert_eq!(v["convex_enclosure"], true);
+    assert_eq!(v["visibility"]["needed"], false);
+    assert_eq!(v["bounding_box"]["max"], serde_json::json!([1.0, 2.0, 3.0]));
+    assert!(
+        v["contents"].is_null(),
+        "an analytic surface has no materials"
+    );
     let out = radcol(&["info", "sphere"]);
     assert!(out.status.success());
-    assert!(String::from_utf8_lossy(&out.stdout).contains("visibility not needed"));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("no visibility tests"));
 }
 
 #[test]
@@ -476,11 +481,20 @@ fn bad_input_gives_one_line_and_exit_code_two() {
     );
     assert_one_line_error(&["solve", "box:1,2"], 2, &["box:1,2"]);
     assert_one_line_error(&["solve", "sphere:-1"], 2, &["> 0"]);
-    assert_one_line_error(&["solve", "cornell"], 2, &["not yet supported", "cornell"]);
     assert_one_line_error(
-        &["solve", "room.obj"],
+        &["solve", "cornell", "--rho", "0.3"],
         2,
-        &["not yet supported", "room.obj"],
+        &["--rho", "cornell", "materials"],
+    );
+    assert_one_line_error(
+        &["study", "plates", "--levels", "0..1", "--exact", "1"],
+        2,
+        &["--exact", "plates", "materials"],
+    );
+    assert_one_line_error(
+        &["solve", "no/such/room.obj"],
+        2,
+        &["cannot read", "no/such/room.obj"],
     );
     assert_one_line_error(
         &["solve", "sphere", "--level", "12", "--degree", "6"],
@@ -529,4 +543,236 @@ fn solver_failure_exits_with_one() {
         1,
         &["not converged"],
     );
+}
+
+/// Every output kind from one solve of the Cornell box, each read back by an
+/// independent reader (png, gltf, ply-rs-bw; EXR by its magic number).
+#[test]
+fn solve_cornell_writes_every_output() {
+    let dir = scratch("cornell");
+    let names = ["c.png", "c.exr", "c.ply", "c.glb", "c.gltf", "c.csv"];
+    let paths: Vec<String> = names
+        .iter()
+        .map(|n| dir.join(n).to_str().unwrap().to_string())
+        .collect();
+    let mut args = vec![
+        "solve",
+        "cornell",
+        "--level",
+        "0",
+        "--backend",
+        "cpu",
+        "--width",
+        "80",
+        "--height",
+        "60",
+        "--samples",
+        "1",
+        "--json",
+    ];
+    for p in &paths {
+        args.extend(["--out", p.as_str()]);
+    }
+    let v = stdout_json(&radcol(&args));
+    assert_eq!(v["visibility"]["needed"], true);
+    assert!(v["assembly"]["pairs_partial"].as_u64().unwrap() > 0);
+    assert_eq!(v["channels"].as_array().unwrap().len(), 3);
+    assert_eq!(v["materials"].as_array().unwrap().len(), 4);
+    assert_eq!(v["out"].as_array().unwrap().len(), names.len());
+    let elements = v["elements"].as_u64().unwrap() as usize;
+    assert_eq!(elements, 38);
+
+    // PNG: the asked size, and the box is lit (the centre ray meets the back wall).
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(&paths[0]).unwrap(),
+    ));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let frame = reader.next_frame(&mut buf).unwrap();
+    assert_eq!((frame.width, frame.height), (80, 60));
+    assert_eq!(frame.color_type, png::ColorType::Rgb);
+    let centre = (30 * 80 + 40) * 3;
+    assert!(
+        buf[centre..centre + 3].iter().all(|&c| c > 20),
+        "{:?}",
+        &buf[centre..centre + 3]
+    );
+
+    // EXR: OpenEXR's magic number.
+    let exr = std::fs::read(&paths[1]).unwrap();
+    assert_eq!(&exr[..4], &[0x76, 0x2f, 0x31, 0x01]);
+
+    // PLY: one radiosity float per channel, 3 vertices per element at r = 1.
+    let ply = read_ply(&paths[2]);
+    assert_eq!(ply.len(), 3 * elements);
+    for (_, _, u) in &ply {
+        assert_eq!(u.len(), 3);
+        assert!(u.iter().all(|x| x.is_finite()));
+    }
+
+    // glTF, binary and embedded: the same vertex count.
+    for p in &paths[3..5] {
+        let (doc, buffers, _) = gltf::import(p).unwrap();
+        let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
+        let reader = prim.reader(|b| Some(&buffers[b.index()]));
+        assert_eq!(reader.read_positions().unwrap().count(), 3 * elements);
+    }
+
+    // CSV: one row per collocation node, one column per channel.
+    let csv = std::fs::read_to_string(&paths[5]).unwrap();
+    assert_eq!(csv.lines().next(), Some("element,node,x,y,z,u_R,u_G,u_B"));
+    assert_eq!(csv.lines().count(), 1 + 3 * elements);
+}
+
+/// (position, normal, radiosity per channel) of every vertex of a radcol PLY.
+fn read_ply(path: &str) -> Vec<([f64; 3], [f64; 3], Vec<f64>)> {
+    use ply_rs_bw::parser::Parser;
+    use ply_rs_bw::ply::{DefaultElement, Property};
+    let mut f = std::io::BufReader::new(std::fs::File::open(path).unwrap());
+    let ply = Parser::<DefaultElement>::new().read_ply(&mut f).unwrap();
+    let float = |e: &DefaultElement, k: &str| match e.get(k) {
+        Some(Property::Float(x)) => *x as f64,
+        other => panic!("{path}: vertex property {k} is {other:?}"),
+    };
+    ply.payload["vertex"]
+        .iter()
+        .map(|e| {
+            let mut u: Vec<(String, f64)> = e
+                .keys()
+                .filter(|k| k.starts_with("radiosity"))
+                .map(|k| (k.clone(), float(e, k)))
+                .collect();
+            u.sort_by(|a, b| a.0.cmp(&b.0));
+            (
+                [float(e, "x"), float(e, "y"), float(e, "z")],
+                [float(e, "nx"), float(e, "ny"), float(e, "nz")],
+                u.into_iter().map(|(_, x)| x).collect(),
+            )
+        })
+        .collect()
+}
+
+/// On the unit sphere with ρ = 1/2 and E = 1 the radiosity is 2 everywhere:
+/// the vertex files say so at every vertex, with vertices on the sphere and
+/// normals pointing inward (the lit side).
+#[test]
+fn vertex_files_carry_the_solution() {
+    let dir = scratch("vertex");
+    let ply = dir.join("s.ply");
+    let glb = dir.join("s.glb");
+    let out = radcol(&[
+        "solve",
+        "sphere",
+        "--level",
+        "1",
+        "--degree",
+        "2",
+        "--backend",
+        "cpu",
+        "--tessellation",
+        "3",
+        "--out",
+        ply.to_str().unwrap(),
+        "--out",
+        glb.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let vertices = read_ply(ply.to_str().unwrap());
+    // 32 elements, 10 vertices each for 3 × 3 sub-triangles.
+    assert_eq!(vertices.len(), 32 * 10);
+    for (x, n, u) in &vertices {
+        let r = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
+        assert!((r - 1.0).abs() < 1e-6, "vertex off the sphere: {x:?}");
+        let dot = (n[0] * x[0] + n[1] * x[1] + n[2] * x[2]) / r;
+        assert!((dot + 1.0).abs() < 1e-5, "normal {n:?} at {x:?}");
+        assert_eq!(u.len(), 1);
+        assert!((u[0] - 2.0).abs() < 1e-5, "u = {}", u[0]);
+    }
+    let (doc, buffers, _) = gltf::import(&glb).unwrap();
+    let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
+    let reader = prim.reader(|b| Some(&buffers[b.index()]));
+    let colours: Vec<[f32; 3]> = reader.read_colors(0).unwrap().into_rgb_f32().collect();
+    assert_eq!(colours.len(), 32 * 10);
+    assert!(colours.iter().all(|c| c == &colours[0] && c[0] > 0.0));
+}
+
+#[test]
+fn info_describes_a_scene() {
+    let v = stdout_json(&radcol(&["info", "cornell", "--level", "0", "--json"]));
+    let c = &v["contents"];
+    assert_eq!(c["triangles"], 38);
+    assert_eq!(c["materials"].as_array().unwrap().len(), 4);
+    assert_eq!(c["emitters"], serde_json::json!(["light/light"]));
+    assert_eq!(v["visibility"]["needed"], true);
+    assert!(v["visibility"]["reason"]
+        .as_str()
+        .unwrap()
+        .contains("behind"));
+    assert_eq!(v["bounding_box"]["max"][0], 556.0);
+    let e = &v["estimate"];
+    assert!(e["pairs_partial"].as_u64().unwrap() > 0);
+    assert!(e["assembly_s"].as_f64().unwrap() > 0.0);
+    // --max-edge refines: no element edge longer than H afterwards.
+    let v = stdout_json(&radcol(&[
+        "info",
+        "cornell",
+        "--level",
+        "0",
+        "--max-edge",
+        "150",
+        "--json",
+    ]));
+    assert!(v["elements"].as_u64().unwrap() > 38);
+    assert!(v["element_size"]["max"].as_f64().unwrap() <= 150.0);
+    let v = stdout_json(&radcol(&["info", "room", "--json"]));
+    assert_eq!(v["visibility"]["needed"], false);
+}
+
+#[test]
+fn scene_input_errors_name_the_file_and_line() {
+    let dir = scratch("bad-obj");
+    std::fs::write(dir.join("m.mtl"), "newmtl w\nKd 0.5 0.5 0.5\n").unwrap();
+    let bad = dir.join("bad.obj");
+    std::fs::write(
+        &bad,
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl w\nf 1 2 7\n",
+    )
+    .unwrap();
+    let b = bad.to_str().unwrap();
+    assert_one_line_error(&["solve", b], 2, &["bad.obj:6", "7"]);
+    assert_one_line_error(&["info", b], 2, &["bad.obj:6"]);
+    let kd = dir.join("kd.obj");
+    std::fs::write(dir.join("k.mtl"), "newmtl w\nKd 1.5 0.5 0.5\n").unwrap();
+    std::fs::write(
+        &kd,
+        "mtllib k.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl w\nf 1 2 3\n",
+    )
+    .unwrap();
+    assert_one_line_error(&["solve", kd.to_str().unwrap()], 2, &["k.mtl:2", "1.5"]);
+    // Options are checked before any work.
+    for (args, needles) in [
+        (
+            vec!["solve", "plates", "--camera", "0,0,0,0,0,0,0,1,0,40"],
+            vec!["--camera", "coincide"],
+        ),
+        (
+            vec!["solve", "plates", "--exposure", "bright"],
+            vec!["--exposure", "bright"],
+        ),
+        (
+            vec!["solve", "plates", "--out", "x.jpg"],
+            vec!["x.jpg", "unknown file type"],
+        ),
+        (
+            vec!["solve", "plates", "--max-edge", "-1"],
+            vec!["--max-edge"],
+        ),
+        (vec!["solve", "plates", "--width", "0"], vec!["--width"]),
+    ] {
+        assert_one_line_error(&args, 2, &needles);
+    }
 }

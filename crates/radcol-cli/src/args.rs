@@ -5,7 +5,9 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 
 const SCENES: &str = "sphere (unit sphere), sphere:R, ellipsoid:A,B,C, box:LX,LY,LZ \
-(the room [0,LX]x[0,LY]x[0,LZ]); cornell and FILE.obj are accepted but not yet supported";
+(the room [0,LX]x[0,LY]x[0,LZ]); the built-in triangle scenes cornell (the Cornell box), \
+room (an empty lit room) and plates (two facing squares); or FILE.obj with its MTL materials \
+(Kd = reflectance ρ, Ke = emission E, per colour channel R, G, B)";
 
 /// Collocation for the radiosity equation u - (ρ/π) ∫ G u = E on curved and
 /// polyhedral surfaces (Atkinson-Chien collocation with Micula's α0 nodes).
@@ -80,16 +82,13 @@ pub struct ProblemArgs {
     pub alpha: String,
 
     /// Reflectivity ρ: a number or an expression in x, y, z; must lie in [0, 1) at every node.
-    #[arg(
-        long,
-        value_name = "EXPR",
-        default_value = "0.5",
-        allow_hyphen_values = true
-    )]
-    pub rho: String,
+    /// Scenes with materials take ρ from Kd and refuse this flag [default: 0.5].
+    #[arg(long, value_name = "EXPR", allow_hyphen_values = true)]
+    pub rho: Option<String>,
 
     /// Emission E: a number or an expression in x, y, z [default: 1 without --exact;
-    /// with --exact, E is manufactured as u - K u with an accurate reference quadrature].
+    /// with --exact, E is manufactured as u - K u with an accurate reference quadrature;
+    /// scenes with materials take E from Ke and refuse this flag].
     #[arg(long, value_name = "EXPR", allow_hyphen_values = true)]
     pub emission: Option<String>,
 
@@ -134,6 +133,17 @@ pub struct ProblemArgs {
     pub force: bool,
 }
 
+/// Tone curve for 8-bit outputs (PNG, vertex colours of PLY and glTF).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum TonemapArg {
+    /// Narkowicz's ACES filmic fit.
+    Aces,
+    /// Reinhard's x / (1 + x), per channel.
+    Reinhard,
+    /// Clamp to [0, 1].
+    Linear,
+}
+
 /// `radcol solve`.
 #[derive(Debug, Args)]
 pub struct SolveArgs {
@@ -141,14 +151,59 @@ pub struct SolveArgs {
     pub problem: ProblemArgs,
 
     /// Refinement level: each level splits every triangle into 4 (8 elements at level 0 on
-    /// a sphere or ellipsoid, 12 on a box).
+    /// a sphere or ellipsoid, 12 on a box, the file's triangles for a scene).
     #[arg(long, short = 'l', value_name = "L", default_value_t = 2)]
     pub level: u32,
 
-    /// Write the nodal solution as CSV (element,node,x,y,z,u per collocation node)
-    /// [default: none]; refuses to overwrite without --force.
-    #[arg(long, value_name = "FILE.csv")]
-    pub out: Option<PathBuf>,
+    /// After the uniform --level, keep splitting elements 4:1 until no edge is longer than H
+    /// (scene units) [default: uniform refinement only].
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub max_edge: Option<f64>,
+
+    /// Write results; repeat for several files. By extension: .csv (one row per collocation
+    /// node: element,node,x,y,z,u…), .ply and .glb/.gltf (per-vertex radiosity on a
+    /// tessellation of every element), .png (tone-mapped image) or .exr (linear radiance u/π)
+    /// seen by --camera. Refuses to overwrite without --force.
+    #[arg(long, value_name = "FILE")]
+    pub out: Vec<PathBuf>,
+
+    /// Camera for .png/.exr as ex,ey,ez,tx,ty,tz,ux,uy,uz,fov: eye, target, up vector and
+    /// vertical field of view in degrees [default: the scene's camera, else one looking at
+    /// the whole scene along +z].
+    #[arg(long, value_name = "EYE,TARGET,UP,FOV", allow_hyphen_values = true)]
+    pub camera: Option<String>,
+
+    /// Image width in pixels.
+    #[arg(long, value_name = "PX", default_value_t = 640)]
+    pub width: u32,
+
+    /// Image height in pixels.
+    #[arg(long, value_name = "PX", default_value_t = 480)]
+    pub height: u32,
+
+    /// Rays per pixel axis (N² rays per pixel, on a regular grid).
+    #[arg(long, value_name = "N", default_value_t = 2)]
+    pub samples: u32,
+
+    /// Exposure for 8-bit outputs: `auto` (the 99th luminance percentile maps to white),
+    /// `auto+S` / `auto-S` (auto, then S stops brighter/darker), or S stops applied to the
+    /// radiance as is.
+    #[arg(
+        long,
+        value_name = "auto|S",
+        default_value = "auto",
+        allow_hyphen_values = true
+    )]
+    pub exposure: String,
+
+    /// Tone curve for 8-bit outputs.
+    #[arg(long, value_enum, default_value_t = TonemapArg::Aces)]
+    pub tonemap: TonemapArg,
+
+    /// Triangles per element edge in .ply/.glb/.gltf (N² per element), so that degree-r
+    /// polynomials show inside elements [default: max(r, 1)].
+    #[arg(long, value_name = "N")]
+    pub tessellation: Option<u32>,
 }
 
 /// `radcol study`.
@@ -197,6 +252,10 @@ pub struct InfoArgs {
     /// Refinement level.
     #[arg(long, short = 'l', value_name = "L", default_value_t = 2)]
     pub level: u32,
+
+    /// As for solve: split elements until no edge is longer than H.
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub max_edge: Option<f64>,
 
     /// Print one JSON object instead of the text report.
     #[arg(long)]

@@ -3,16 +3,19 @@
 
 use crate::args::{
     BackendArg, Cli, Command, InfoArgs, NodesArgs, PrecisionArg, ProblemArgs, SolveArgs, SolverArg,
-    StudyArgs,
+    StudyArgs, TonemapArg,
 };
 use crate::error::{bad_input, BadInput};
-use crate::scene::SceneSpec;
+use crate::scene::{Loaded, SceneSpec};
 use anyhow::{Context, Result};
 use radcol_core::alpha0::auto_alpha;
 use radcol_core::assembly::{AssemblyBackend, CpuBackend, QuadratureOptions};
+use radcol_core::camera::Camera;
 use radcol_core::geometry::Surface;
+use radcol_core::mesh::Mesh;
 use radcol_core::nodes::MAX_DEGREE;
 use radcol_core::problem::{Field, Problem, ReferenceOperator};
+use radcol_core::render::{RenderOptions, ToneMap, ToneOperator};
 use radcol_core::run::{check_memory, SolveConfig, SolverKind};
 use radcol_core::solve::GmresParams;
 use std::fmt;
@@ -54,6 +57,8 @@ pub struct Alpha {
 pub struct Setup {
     /// Scene name for reports.
     pub scene: String,
+    /// The surface, or the scene with its materials and camera.
+    pub loaded: Loaded,
     /// The problem (surface, ρ, E, exact u).
     pub problem: Problem,
     /// Degree, α, level, solver and quadrature settings.
@@ -77,8 +82,66 @@ pub struct Setup {
 pub struct SolveJob {
     /// Problem and settings (the level is `setup.cfg.level`).
     pub setup: Setup,
-    /// CSV file for the nodal solution.
-    pub out: Option<OutputFile>,
+    /// Files to write, in the order given.
+    pub outputs: Vec<Output>,
+    /// How images and vertex meshes are made.
+    pub look: Look,
+}
+
+/// The kinds of file `--out` writes, by extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutputKind {
+    /// Nodal values, one row per collocation node.
+    Csv,
+    /// Binary PLY vertex mesh.
+    Ply,
+    /// Binary glTF.
+    Glb,
+    /// glTF JSON with the buffer embedded.
+    Gltf,
+    /// Tone-mapped 8-bit image.
+    Png,
+    /// Linear radiance image.
+    Exr,
+}
+
+impl OutputKind {
+    /// Every kind with its extension.
+    pub const ALL: [(OutputKind, &'static str); 6] = [
+        (OutputKind::Csv, "csv"),
+        (OutputKind::Ply, "ply"),
+        (OutputKind::Glb, "glb"),
+        (OutputKind::Gltf, "gltf"),
+        (OutputKind::Png, "png"),
+        (OutputKind::Exr, "exr"),
+    ];
+
+    /// True for the rendered images.
+    pub fn is_image(self) -> bool {
+        matches!(self, OutputKind::Png | OutputKind::Exr)
+    }
+}
+
+/// One `--out` file.
+#[derive(Clone, Debug)]
+pub struct Output {
+    /// What to write.
+    pub kind: OutputKind,
+    /// Where.
+    pub file: OutputFile,
+}
+
+/// Camera, image and tone-mapping settings for the outputs people look at.
+#[derive(Clone, Debug)]
+pub struct Look {
+    /// The camera of the images.
+    pub camera: Camera,
+    /// Image size and sampling.
+    pub render: RenderOptions,
+    /// Exposure and tone curve of 8-bit outputs.
+    pub tone: ToneMap,
+    /// Triangles per element edge of vertex meshes.
+    pub tessellation: u32,
 }
 
 /// `radcol study`.
@@ -108,8 +171,12 @@ pub struct NodesJob {
 pub struct InfoJob {
     /// Scene name.
     pub scene: String,
+    /// The surface, or the scene with its materials.
+    pub loaded: Loaded,
     /// The surface.
     pub surface: Arc<Surface>,
+    /// Maximum edge length after uniform refinement.
+    pub max_edge: Option<f64>,
     /// Degree r (for unknowns and memory).
     pub degree: usize,
     /// Refinement level.
@@ -181,21 +248,151 @@ impl Config {
 }
 
 fn solve_job(a: SolveArgs) -> Result<SolveJob> {
-    let out = a
-        .out
-        .as_deref()
-        .map(|p| {
-            output_file(
-                p,
-                "csv",
-                "--out",
-                "only .csv output for now",
-                a.problem.force,
-            )
-        })
-        .transpose()?;
-    let setup = setup(&a.problem, a.level, a.level)?;
-    Ok(SolveJob { setup, out })
+    let mut outputs: Vec<Output> = Vec::new();
+    for p in &a.out {
+        let output = output(p, a.problem.force)?;
+        if outputs.iter().any(|o| o.file.path == output.file.path) {
+            return Err(bad_input(format!("--out {} is given twice", p.display())).into());
+        }
+        outputs.push(output);
+    }
+    let max_edge = a.max_edge.map(check_max_edge).transpose()?;
+    let setup = setup(&a.problem, a.level, a.level, max_edge)?;
+    let look = look(&a, &setup)?;
+    Ok(SolveJob {
+        setup,
+        outputs,
+        look,
+    })
+}
+
+fn check_max_edge(h: f64) -> Result<f64, BadInput> {
+    if !(h.is_finite() && h > 0.0) {
+        return Err(bad_input(format!(
+            "--max-edge {h}: the maximum edge length must be a positive finite number (scene units)"
+        )));
+    }
+    Ok(h)
+}
+
+/// An `--out` path: its kind from the extension, checked like every output file.
+fn output(path: &Path, force: bool) -> Result<Output, BadInput> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    let Some(&(kind, ext)) = OutputKind::ALL.iter().find(|(_, e)| *e == ext) else {
+        return Err(bad_input(format!(
+            "--out {}: unknown file type; the name must end in .csv, .ply, .glb, .gltf, .png or .exr",
+            path.display()
+        )));
+    };
+    let file = output_file(path, ext, "--out", "", force)?;
+    Ok(Output { kind, file })
+}
+
+/// Camera, image size, exposure and tessellation; checked even when no image
+/// is asked for, so that a typo never waits for a solve.
+fn look(a: &SolveArgs, s: &Setup) -> Result<Look, BadInput> {
+    let camera = match &a.camera {
+        Some(text) => Camera::parse(text).map_err(|e| bad_input(format!("--camera: {e}")))?,
+        None => default_camera(&s.loaded),
+    };
+    for (flag, v) in [
+        ("--width", a.width),
+        ("--height", a.height),
+        ("--samples", a.samples),
+    ] {
+        if v == 0 {
+            return Err(bad_input(format!("{flag} must be at least 1")));
+        }
+    }
+    let pixels = a.width as u64 * a.height as u64 * (a.samples as u64).pow(2);
+    if pixels > 1 << 30 {
+        return Err(bad_input(format!(
+            "--width {} --height {} --samples {}: {pixels} rays is more than radcol renders (2^30)",
+            a.width, a.height, a.samples
+        )));
+    }
+    let tessellation = a.tessellation.unwrap_or(s.cfg.degree.max(1) as u32);
+    if !(1..=64).contains(&tessellation) {
+        return Err(bad_input(format!(
+            "--tessellation {tessellation}: must lie in 1..=64"
+        )));
+    }
+    Ok(Look {
+        camera,
+        render: RenderOptions {
+            width: a.width,
+            height: a.height,
+            samples: a.samples,
+            ..RenderOptions::default()
+        },
+        tone: ToneMap {
+            operator: match a.tonemap {
+                TonemapArg::Aces => ToneOperator::Aces,
+                TonemapArg::Reinhard => ToneOperator::Reinhard,
+                TonemapArg::Linear => ToneOperator::Linear,
+            },
+            ..parse_exposure(&a.exposure)?
+        },
+        tessellation,
+    })
+}
+
+/// `auto`, `auto+S`, `auto-S` or a number of stops S.
+pub fn parse_exposure(text: &str) -> Result<ToneMap, BadInput> {
+    let t = text.trim();
+    let lower = t.to_ascii_lowercase();
+    let (auto, stops) = match lower.strip_prefix("auto") {
+        Some("") => (true, "0"),
+        Some(rest) => (true, rest.strip_prefix('+').unwrap_or(rest)),
+        None => (false, t),
+    };
+    let exposure: f64 = stops
+        .trim()
+        .parse()
+        .ok()
+        .filter(|v: &f64| v.is_finite())
+        .ok_or_else(|| {
+            bad_input(format!(
+                "--exposure '{t}': expected auto, auto+S, auto-S or a number of stops S"
+            ))
+        })?;
+    Ok(ToneMap {
+        exposure,
+        auto,
+        ..ToneMap::default()
+    })
+}
+
+/// The scene's camera, or for a bare surface one at the centre of its
+/// bounding box looking along +z (analytic surfaces are enclosures, seen
+/// from inside), with a 90° field of view.
+pub fn default_camera(loaded: &Loaded) -> Camera {
+    match loaded {
+        Loaded::Scene(s) => s.camera_or_default(),
+        Loaded::Surface(surface) => {
+            let (lo, hi) = radcol_core::visibility::base_triangles(surface)
+                .iter()
+                .flatten()
+                .fold(
+                    (
+                        glam::DVec3::splat(f64::INFINITY),
+                        glam::DVec3::splat(f64::NEG_INFINITY),
+                    ),
+                    |(lo, hi), v| (lo.min(*v), hi.max(*v)),
+                );
+            let centre = (lo + hi) * 0.5;
+            Camera {
+                eye: centre,
+                target: centre + glam::DVec3::Z,
+                up: glam::DVec3::Y,
+                fov_y_deg: 90.0,
+            }
+        }
+    }
 }
 
 fn study_job(a: StudyArgs) -> Result<StudyJob> {
@@ -220,7 +417,7 @@ fn study_job(a: StudyArgs) -> Result<StudyJob> {
             )
         })
         .transpose()?;
-    let setup = setup(&a.problem, *levels.start(), *levels.end())?;
+    let setup = setup(&a.problem, *levels.start(), *levels.end(), None)?;
     Ok(StudyJob {
         setup,
         levels,
@@ -239,21 +436,55 @@ fn nodes_job(a: NodesArgs) -> Result<NodesJob> {
 }
 
 fn info_job(a: InfoArgs) -> Result<InfoJob> {
-    let surface = SceneSpec::parse(&a.scene)?.surface()?;
+    let loaded = SceneSpec::parse(&a.scene)?.load()?;
+    warn_scene(&loaded);
     let degree = check_degree(a.degree)?;
+    let max_edge = a.max_edge.map(check_max_edge).transpose()?;
     Ok(InfoJob {
-        scene: surface.name.clone(),
-        surface: Arc::new(surface),
+        scene: loaded.surface().name.clone(),
+        surface: loaded.surface().clone(),
+        loaded,
+        max_edge,
         degree,
         level: a.level,
         json: a.json,
     })
 }
 
+/// Prints a scene's repair and input warnings on stderr (the report on stdout
+/// stays machine-readable).
+fn warn_scene(loaded: &Loaded) {
+    if let Some(scene) = loaded.scene() {
+        for w in &scene.warnings {
+            eprintln!("warning: {}: {w}", scene.name);
+        }
+    }
+}
+
 /// Validates the shared options; `max_level` is the finest level that will be
 /// solved (checked against memory before anything is built).
-fn setup(p: &ProblemArgs, level: u32, max_level: u32) -> Result<Setup> {
-    let surface = Arc::new(SceneSpec::parse(&p.scene)?.surface()?);
+fn setup(p: &ProblemArgs, level: u32, max_level: u32, max_edge: Option<f64>) -> Result<Setup> {
+    let spec = SceneSpec::parse(&p.scene)?;
+    if spec.has_materials() {
+        for (flag, given) in [
+            ("--rho", p.rho.is_some()),
+            ("--emission", p.emission.is_some()),
+            ("--exact", p.exact.is_some()),
+        ] {
+            if given {
+                return Err(bad_input(format!(
+                    "{flag}: scene '{}' takes ρ and E from its materials (Kd, Ke) and has no known \
+                     exact solution; {flag} applies to the analytic surfaces (sphere, ellipsoid, box)",
+                    p.scene.trim()
+                ))
+                .into());
+            }
+        }
+    }
+    let loaded = spec.load()?;
+    warn_scene(&loaded);
+    let surface = loaded.surface().clone();
+    radcol_core::run::check_visibility_supported(&surface).map_err(|e| bad_input(e.to_string()))?;
     let degree = check_degree(p.degree)?;
     let alpha = parse_alpha(&p.alpha, degree)?;
     let solver = match p.solver {
@@ -268,7 +499,8 @@ fn setup(p: &ProblemArgs, level: u32, max_level: u32) -> Result<Setup> {
     if p.max_iters == 0 {
         return Err(bad_input("--max-iters must be at least 1").into());
     }
-    let rho = Field::parse(&p.rho).context("--rho")?;
+    let rho_text = p.rho.clone().unwrap_or_else(|| "0.5".into());
+    let rho = Field::parse(&rho_text).context("--rho")?;
     let emission = p
         .emission
         .as_deref()
@@ -283,14 +515,19 @@ fn setup(p: &ProblemArgs, level: u32, max_level: u32) -> Result<Setup> {
         requested: p.backend,
         imp: make_backend(p.backend, p.precision)?,
     };
-    check_size(&surface, degree, max_level, solver)?;
+    check_size(&surface, degree, max_level, max_edge, solver)?;
 
-    let emission_text = match (&p.emission, &p.exact) {
-        (Some(e), _) => e.clone(),
-        (None, Some(_)) => "manufactured: u - K u".to_string(),
-        (None, None) => "1".to_string(),
+    let (rho_text, emission_text) = match (&loaded, &p.emission, &p.exact) {
+        (Loaded::Scene(_), _, _) => (
+            "Kd of the materials (R, G, B)".to_string(),
+            "Ke of the materials (R, G, B)".to_string(),
+        ),
+        (_, Some(e), _) => (rho_text, e.clone()),
+        (_, None, Some(_)) => (rho_text, "manufactured: u - K u".to_string()),
+        (_, None, None) => (rho_text, "1".to_string()),
     };
     let problem = match (emission, exact) {
+        _ if loaded.scene().is_some() => loaded.scene().expect("checked").problem(),
         (None, Some(u)) => Problem::manufactured(
             surface.clone(),
             rho,
@@ -318,15 +555,17 @@ fn setup(p: &ProblemArgs, level: u32, max_level: u32) -> Result<Setup> {
             ..QuadratureOptions::default()
         },
         check_memory: true,
-        max_edge: None,
+        max_edge,
+        progress: None,
     };
     Ok(Setup {
         scene: surface.name.clone(),
+        loaded,
         problem,
         cfg,
         alpha,
         backend,
-        rho: p.rho.clone(),
+        rho: rho_text,
         emission: emission_text,
         exact: p.exact.clone(),
         json: p.json,
@@ -399,15 +638,34 @@ pub fn parse_levels(text: &str) -> Result<RangeInclusive<u32>, BadInput> {
     Ok(a..=b)
 }
 
-/// Unknowns N = (base triangles · 4^level) · f_r, as f64 (no overflow).
-pub fn unknowns_f64(surface: &Surface, degree: usize, level: u32) -> f64 {
+/// Elements at `level` (then split to `max_edge`, when given).
+pub fn elements_f64(surface: &Arc<Surface>, level: u32, max_edge: Option<f64>) -> f64 {
+    match max_edge {
+        Some(h) => Mesh::count_with_max_edge(surface.clone(), level, h) as f64,
+        None => surface.base_triangle_count() as f64 * 4f64.powf(level as f64),
+    }
+}
+
+/// Unknowns N = elements · f_r, as f64 (no overflow).
+pub fn unknowns_f64(
+    surface: &Arc<Surface>,
+    degree: usize,
+    level: u32,
+    max_edge: Option<f64>,
+) -> f64 {
     let f = ((degree + 1) * (degree + 2) / 2) as f64;
-    surface.base_triangle_count() as f64 * 4f64.powf(level as f64) * f
+    elements_f64(surface, level, max_edge) * f
 }
 
 /// Refuses, before anything is built, a level whose dense matrix cannot fit.
-fn check_size(surface: &Surface, degree: usize, level: u32, solver: SolverKind) -> Result<()> {
-    let n = unknowns_f64(surface, degree, level);
+fn check_size(
+    surface: &Arc<Surface>,
+    degree: usize,
+    level: u32,
+    max_edge: Option<f64>,
+    solver: SolverKind,
+) -> Result<()> {
+    let n = unknowns_f64(surface, degree, level, max_edge);
     if n >= HUGE_UNKNOWNS {
         let gib = 8.0 * n * n / 1073741824.0;
         return Err(bad_input(format!(

@@ -10,16 +10,17 @@
 //! radcol study sphere --degree 1 --levels 0..3 --exact 'x*y+z' --plot conv.svg
 //! radcol nodes --degree 3
 //! radcol info box:1,1,1 --level 3 --degree 2
+//! radcol solve cornell --max-edge 60 --out cornell.png --out cornell.glb
+//! radcol info scene.obj --json
 //! ```
 
 mod args;
 mod config;
 mod error;
-// The writers are wired to CLI flags later; until then only their tests use them.
-#[allow(dead_code)]
 mod export;
 mod output;
 mod plot;
+mod progress;
 mod report;
 mod run;
 mod scene;

@@ -1,11 +1,100 @@
-//! Files the CLI writes: the nodal CSV, and the overwrite rule shared by every file.
+//! Files the CLI writes: the nodal CSV, images and vertex meshes, and the
+//! overwrite rule shared by every file.
 
-use crate::config::OutputFile;
+use crate::config::{Look, Output, OutputFile, OutputKind};
 use crate::error::bad_input;
+use crate::export;
+use crate::progress::Bar;
+use crate::report::Written;
 use anyhow::{Context, Result};
+use radcol_core::render::{self, Image, VertexMesh};
 use radcol_core::run::SolveOutcome;
+use radcol_core::solution::Solution;
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Write};
+use std::time::Instant;
+
+/// Writes every `--out` file, rendering the image and tessellating the
+/// vertex mesh once each however many files use them.
+pub fn write_all(
+    outputs: &[Output],
+    look: &Look,
+    out: &SolveOutcome,
+    bar: Option<&Bar>,
+) -> Result<Vec<Written>> {
+    let mesh = out.discretization.mesh();
+    let solutions: Vec<&Solution> = out.channels.iter().map(|c| &c.solution).collect();
+    let names: Vec<&str> = out.channels.iter().map(|c| c.name.as_str()).collect();
+    let mut image: Option<Image> = None;
+    let mut vertices: Option<VertexMesh> = None;
+    let mut written = Vec::new();
+    for o in outputs {
+        let t = Instant::now();
+        let path = o.file.path.display().to_string();
+        if let Some(b) = bar {
+            b.spin(format!("writing {path}"));
+        }
+        if o.kind.is_image() && image.is_none() {
+            if let Some(b) = bar {
+                b.spin(format!(
+                    "rendering {}×{} ({}² rays per pixel)",
+                    look.render.width, look.render.height, look.render.samples
+                ));
+            }
+            image = Some(render::render(
+                mesh,
+                &solutions,
+                &look.camera,
+                &look.render,
+            )?);
+        }
+        if matches!(o.kind, OutputKind::Ply | OutputKind::Glb | OutputKind::Gltf)
+            && vertices.is_none()
+        {
+            vertices = Some(render::vertex_mesh(mesh, &solutions, look.tessellation)?);
+        }
+        let what = match o.kind {
+            OutputKind::Csv => format!("{} node rows", write_csv(&o.file, out)?),
+            OutputKind::Png => {
+                let img = image.as_ref().expect("rendered above");
+                let pixels = render::tone_map(img, &look.tone);
+                let mut f = create(&o.file)?;
+                export::png::write(&mut f, img.width, img.height, &pixels)
+                    .and_then(|_| Ok(f.flush()?))
+                    .with_context(|| format!("writing {path}"))?;
+                format!("{}×{} image", img.width, img.height)
+            }
+            OutputKind::Exr => {
+                let img = image.as_ref().expect("rendered above");
+                let f = create(&o.file)?;
+                export::exr::write(f, img).with_context(|| format!("writing {path}"))?;
+                format!("{}×{} linear radiance image", img.width, img.height)
+            }
+            OutputKind::Ply | OutputKind::Glb | OutputKind::Gltf => {
+                let vm = vertices.as_ref().expect("tessellated above");
+                let mut f = create(&o.file)?;
+                match o.kind {
+                    OutputKind::Ply => export::ply::write(&mut f, vm, &names, &look.tone),
+                    OutputKind::Glb => export::gltf::write_glb(&mut f, vm, &look.tone),
+                    _ => export::gltf::write_gltf(&mut f, vm, &look.tone),
+                }
+                .and_then(|_| Ok(f.flush()?))
+                .with_context(|| format!("writing {path}"))?;
+                format!(
+                    "{} vertices, {} triangles",
+                    vm.vertex_count(),
+                    vm.triangle_count()
+                )
+            }
+        };
+        written.push(Written {
+            path,
+            what,
+            seconds: t.elapsed().as_secs_f64(),
+        });
+    }
+    Ok(written)
+}
 
 /// Opens `file` for writing: a fresh file, or (with `--force`) a truncated one.
 /// `create_new` closes the gap between the check in `config` and this write.

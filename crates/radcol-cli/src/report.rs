@@ -32,12 +32,23 @@ fn alpha_text(a: &Alpha, degree: usize) -> String {
     }
 }
 
+/// A file `radcol solve` wrote.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Written {
+    /// Where.
+    pub path: String,
+    /// What it holds, one phrase ("38 node rows", "640×480 image").
+    pub what: String,
+    /// Seconds spent making and writing it.
+    pub seconds: f64,
+}
+
 /// `radcol solve`, text.
 pub fn solve_text(
     w: &mut dyn Write,
     s: &Setup,
     out: &SolveOutcome,
-    csv: Option<(&str, usize)>,
+    written: &[Written],
 ) -> io::Result<()> {
     let disc = &out.discretization;
     let mesh = disc.mesh();
@@ -68,6 +79,26 @@ pub fn solve_text(
         s.emission,
         s.exact.as_deref().unwrap_or("unknown")
     )?;
+    if let Some(scene) = s.loaded.scene() {
+        let emitters: Vec<&str> = scene
+            .materials
+            .iter()
+            .filter(|m| m.is_emitter())
+            .map(|m| m.name.as_str())
+            .collect();
+        writeln!(
+            w,
+            "  scene       {} triangles, {} materials, emitting: {}",
+            scene.triangle_count(),
+            scene.materials.len(),
+            if emitters.is_empty() {
+                "none (the solution is 0)".to_string()
+            } else {
+                emitters.join(", ")
+            }
+        )?;
+    }
+    writeln!(w, "  visibility  {}", out.visibility.reason)?;
     writeln!(
         w,
         "  backend     {} ({}, {})",
@@ -80,11 +111,16 @@ pub fn solve_text(
     };
     writeln!(
         w,
-        "  assembly    pairs: {} far, {} near, {} self, {} culled; {} kernel evaluations ({rate}){}",
+        "  assembly    pairs: {} far, {} near, {} self, {} culled{}; {} kernel evaluations ({rate}){}",
         p.pairs_far,
         p.pairs_near,
         p.pairs_self,
         p.pairs_culled,
+        if out.visibility.needed {
+            format!(", {} partly visible (clipped)", p.pairs_partial)
+        } else {
+            String::new()
+        },
         out.kernel_evals,
         out.device_seconds
             .map(|d| format!(", device {}", secs(d)))
@@ -132,14 +168,14 @@ pub fn solve_text(
             )?,
         }
     }
-    if let Some((path, rows)) = csv {
-        writeln!(w, "  wrote {rows} node rows to {path}")?;
+    for f in written {
+        writeln!(w, "  wrote {} to {} ({})", f.what, f.path, secs(f.seconds))?;
     }
     Ok(())
 }
 
 /// `radcol solve`, JSON.
-pub fn solve_json(s: &Setup, out: &SolveOutcome, csv: Option<&str>) -> Value {
+pub fn solve_json(s: &Setup, out: &SolveOutcome, written: &[Written]) -> Value {
     let disc = &out.discretization;
     let (sr_lo, sr_hi) = disc.mesh().shape_ratio_range();
     let p = &out.plan;
@@ -185,11 +221,16 @@ pub fn solve_json(s: &Setup, out: &SolveOutcome, csv: Option<&str>) -> Value {
             "pairs_near": p.pairs_near,
             "pairs_self": p.pairs_self,
             "pairs_culled": p.pairs_culled,
+            "pairs_partial": p.pairs_partial,
             "far_kernel_evals": p.far_kernel_evals,
             "device_s": out.device_seconds,
         },
+        "visibility": out.visibility,
+        "materials": s.loaded.scene().map(|sc| sc.materials.iter().map(|m| json!({
+            "name": m.name, "rho": m.rho, "emission": m.emission,
+        })).collect::<Vec<_>>()),
         "channels": channels,
-        "out": csv,
+        "out": written,
     })
 }
 
@@ -431,6 +472,8 @@ pub struct InfoReport {
     pub scene: String,
     /// Refinement level asked for.
     pub level: u32,
+    /// Maximum edge length after the uniform level, when asked for.
+    pub max_edge: Option<f64>,
     /// Degree asked for.
     pub degree: usize,
     /// Elements at `level`.
@@ -439,22 +482,105 @@ pub struct InfoReport {
     pub patches: usize,
     /// Base triangles (level 0 elements).
     pub base_triangles: usize,
-    /// Mesh size h at `level`.
+    /// Mesh size h at `level` (largest parameter-space diameter, eq. 11).
     pub h: f64,
+    /// Longest edge of the mapped straight elements: min, mean, max.
+    pub element_size: ElementSize,
     /// Shape ratio (min, max), measured at `measured_level`.
     pub shape_ratio: ShapeRatio,
     /// Surface area, measured at `measured_level`.
     pub area: f64,
+    /// Axis-aligned bounding box of the base triangles' vertices.
+    pub bounding_box: BoundingBox,
     /// The level whose mesh was built (below `level` when that mesh is too big to build).
     pub measured_level: u32,
     /// Unknowns N at `degree` and `level`.
     pub unknowns: u64,
     /// Memory of the dense matrices.
     pub memory: Memory,
-    /// True when S bounds a convex set (no visibility tests needed).
-    pub convex_enclosure: bool,
-    /// One sentence about visibility.
-    pub visibility: String,
+    /// Whether visibility tests are needed, and why.
+    pub visibility: radcol_core::visibility::VisibilityAnalysis,
+    /// Triangles, materials and emitters of a scene with materials.
+    pub contents: Option<SceneInfo>,
+    /// Assembly time and work, measured on a sample (None for large meshes).
+    pub estimate: Option<Estimate>,
+}
+
+/// Element sizes (longest edge).
+#[derive(Debug, serde::Serialize)]
+pub struct ElementSize {
+    /// Smallest.
+    pub min: f64,
+    /// Mean.
+    pub mean: f64,
+    /// Largest.
+    pub max: f64,
+}
+
+/// Bounding box.
+#[derive(Debug, serde::Serialize)]
+pub struct BoundingBox {
+    /// Smallest x, y, z.
+    pub min: [f64; 3],
+    /// Largest x, y, z.
+    pub max: [f64; 3],
+}
+
+/// What a scene with materials holds.
+#[derive(Debug, serde::Serialize)]
+pub struct SceneInfo {
+    /// File read, for OBJ scenes.
+    pub source: Option<String>,
+    /// Triangles after repairs.
+    pub triangles: usize,
+    /// Distinct vertex positions.
+    pub vertices: usize,
+    /// The materials.
+    pub materials: Vec<MaterialInfo>,
+    /// Patches (group/material) that emit.
+    pub emitters: Vec<String>,
+    /// Repairs and suspicious input.
+    pub warnings: Vec<String>,
+}
+
+/// One material.
+#[derive(Debug, serde::Serialize)]
+pub struct MaterialInfo {
+    /// Name.
+    pub name: String,
+    /// Kd.
+    pub rho: [f64; 3],
+    /// Ke.
+    pub emission: [f64; 3],
+    /// Triangles using it.
+    pub triangles: usize,
+    /// Their area.
+    pub area: f64,
+}
+
+/// Assembly estimate from timed row blocks.
+#[derive(Debug, serde::Serialize)]
+pub struct Estimate {
+    /// Seconds to plan (classify pairs, clip tests).
+    pub plan_s: f64,
+    /// Estimated assembly seconds on the CPU backend (plan included).
+    pub assembly_s: f64,
+    /// Row blocks timed.
+    pub sampled_blocks: usize,
+    /// Threads assumed.
+    pub threads: usize,
+    /// Far pairs.
+    pub pairs_far: u64,
+    /// Near pairs.
+    pub pairs_near: u64,
+    /// Partly visible pairs.
+    pub pairs_partial: u64,
+    /// Culled pairs.
+    pub pairs_culled: u64,
+    /// 2 N² per GMRES iteration and channel.
+    pub gmres_flops_per_iteration: f64,
+    /// 2 N³ / 3 for one LU factorisation.
+    pub lu_flops: f64,
 }
 
 /// Shape ratio range.
@@ -501,6 +627,11 @@ pub fn info_text(w: &mut dyn Write, i: &InfoReport) -> io::Result<()> {
     writeln!(w, "  patches         {}", i.patches)?;
     writeln!(w, "  base triangles  {}", i.base_triangles)?;
     writeln!(w, "  h               {:.6}", i.h)?;
+    writeln!(
+        w,
+        "  element size    longest edge {:.6} min, {:.6} mean, {:.6} max",
+        i.element_size.min, i.element_size.mean, i.element_size.max
+    )?;
     let at = if i.measured_level != i.level {
         format!(
             " (measured at level {}: the level-{} mesh is too big to build here)",
@@ -530,9 +661,76 @@ pub fn info_text(w: &mut dyn Write, i: &InfoReport) -> io::Result<()> {
         gib(i.memory.matrix_bytes + i.memory.lu_extra_bytes),
         yes(i.memory.fits_lu)
     )?;
+    writeln!(w, "  visibility      {}", i.visibility.reason)?;
     writeln!(
         w,
-        "  convex          {}: {}",
-        i.convex_enclosure, i.visibility
-    )
+        "  bounding box    ({:.6}, {:.6}, {:.6}) .. ({:.6}, {:.6}, {:.6})",
+        i.bounding_box.min[0],
+        i.bounding_box.min[1],
+        i.bounding_box.min[2],
+        i.bounding_box.max[0],
+        i.bounding_box.max[1],
+        i.bounding_box.max[2]
+    )?;
+    if let Some(sc) = &i.contents {
+        writeln!(
+            w,
+            "  scene           {} triangles, {} vertices{}",
+            sc.triangles,
+            sc.vertices,
+            sc.source
+                .as_ref()
+                .map(|s| format!(", from {s}"))
+                .unwrap_or_default()
+        )?;
+        for m in &sc.materials {
+            writeln!(
+                w,
+                "  material        {:<12} ρ = ({:.4}, {:.4}, {:.4}), E = ({:.4}, {:.4}, {:.4}), {} triangles, area {:.6}",
+                m.name,
+                m.rho[0],
+                m.rho[1],
+                m.rho[2],
+                m.emission[0],
+                m.emission[1],
+                m.emission[2],
+                m.triangles,
+                m.area
+            )?;
+        }
+        writeln!(
+            w,
+            "  emitters        {}",
+            if sc.emitters.is_empty() {
+                "none: every solution is 0".to_string()
+            } else {
+                sc.emitters.join(", ")
+            }
+        )?;
+        writeln!(w, "  warnings        {}", sc.warnings.len())?;
+    }
+    match &i.estimate {
+        Some(e) => {
+            writeln!(
+                w,
+                "  pairs           {} far, {} near, {} partly visible, {} culled",
+                e.pairs_far, e.pairs_near, e.pairs_partial, e.pairs_culled
+            )?;
+            writeln!(
+                w,
+                "  time estimate   assembly ≈ {} on {} CPU threads (plan {}, {} row blocks timed); \
+                 solve: {:.3e} flops per GMRES iteration and channel, {:.3e} for an LU factorisation",
+                secs(e.assembly_s),
+                e.threads,
+                secs(e.plan_s),
+                e.sampled_blocks,
+                e.gmres_flops_per_iteration,
+                e.lu_flops
+            )
+        }
+        None => writeln!(
+            w,
+            "  time estimate   - (more elements than radcol info plans; try a lower --level)"
+        ),
+    }
 }

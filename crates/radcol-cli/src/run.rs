@@ -1,16 +1,23 @@
 //! Executing a validated [`Config`]: call core, then report.
 
 use crate::config::{Config, InfoJob, NodesJob, SolveJob, StudyJob};
-use crate::report::{self, InfoReport, Memory, ShapeRatio};
-use crate::{output, plot};
+use crate::report::{
+    self, BoundingBox, ElementSize, Estimate, InfoReport, MaterialInfo, Memory, SceneInfo,
+    ShapeRatio,
+};
+use crate::{output, plot, progress};
 use anyhow::{Context, Result};
-use radcol_core::alpha0::find_alpha0;
+use radcol_core::alpha0::{auto_alpha, find_alpha0};
+use radcol_core::assembly::{AssemblyPlan, FillMode, QuadratureOptions};
+use radcol_core::discretization::Discretization;
 use radcol_core::mesh::Mesh;
 use radcol_core::nodes::NodeSet;
 use radcol_core::run::{available_memory, check_memory, solve, SolverKind};
 use radcol_core::study::study;
+use radcol_core::visibility;
 use std::io::{self, Write};
 use std::sync::Arc;
+use std::time::Instant;
 
 /// Largest mesh `radcol info` builds to measure shape ratios and area.
 const INFO_MAX_BUILT_ELEMENTS: u64 = 1 << 17;
@@ -38,23 +45,19 @@ fn print_json(w: &mut dyn Write, v: &serde_json::Value) -> Result<()> {
     Ok(())
 }
 
-fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
+fn run_solve(mut job: SolveJob, w: &mut dyn Write) -> Result<()> {
+    let bar = progress::Bar::for_stderr();
+    job.setup.cfg.progress = bar.as_ref().map(|b| b.handle());
     let s = &job.setup;
     let out = solve(&s.problem, &s.cfg, s.backend.imp.as_ref())?;
-    let csv = match &job.out {
-        Some(file) => Some((
-            file.path.display().to_string(),
-            output::write_csv(file, &out)?,
-        )),
-        None => None,
-    };
+    let written = output::write_all(&job.outputs, &job.look, &out, bar.as_ref())?;
+    if let Some(b) = bar {
+        b.finish();
+    }
     if s.json {
-        print_json(
-            w,
-            &report::solve_json(s, &out, csv.as_ref().map(|c| c.0.as_str())),
-        )
+        print_json(w, &report::solve_json(s, &out, &written))
     } else {
-        report::solve_text(w, s, &out, csv.as_ref().map(|(p, n)| (p.as_str(), *n)))?;
+        report::solve_text(w, s, &out, &written)?;
         Ok(())
     }
 }
@@ -145,31 +148,106 @@ fn run_info(job: InfoJob, w: &mut dyn Write) -> Result<()> {
         .into());
     }
     let base = job.surface.base_triangle_count() as u64;
-    let elements = base * 4u64.pow(job.level);
+    let elements = match job.max_edge {
+        Some(h) => Mesh::count_with_max_edge(job.surface.clone(), job.level, h),
+        None => base * 4u64.pow(job.level),
+    };
     // The finest level we are willing to build; h halves with every level beyond.
+    let build = |level: u32| match job.max_edge {
+        Some(h) => Mesh::with_max_edge(Arc::clone(&job.surface), level, h),
+        None => Mesh::new(Arc::clone(&job.surface), level),
+    };
     let mut measured_level = job.level;
-    while measured_level > 0 && base * 4u64.pow(measured_level) > INFO_MAX_BUILT_ELEMENTS {
-        measured_level -= 1;
-    }
-    let mesh = Mesh::new(Arc::clone(&job.surface), measured_level);
-    let h = mesh.h() / 2f64.powi((job.level - measured_level) as i32);
+    let mesh = if elements <= INFO_MAX_BUILT_ELEMENTS {
+        build(job.level)
+    } else {
+        while measured_level > 0 && base * 4u64.pow(measured_level) > INFO_MAX_BUILT_ELEMENTS {
+            measured_level -= 1;
+        }
+        Mesh::new(Arc::clone(&job.surface), measured_level)
+    };
+    let shrink = 2f64.powi((job.level - measured_level) as i32);
+    let sizes: Vec<f64> = (0..mesh.len())
+        .map(|k| {
+            let [a, b, c] = mesh.vertices(k);
+            (b - a).length().max((c - b).length()).max((a - c).length())
+        })
+        .collect();
     let (lo, hi) = mesh.shape_ratio_range();
     let f = ((job.degree + 1) * (job.degree + 2) / 2) as u64;
     let unknowns = elements * f;
     let n = unknowns as f64;
     let matrix_bytes = 8.0 * n * n;
     let fits = |solver| usize::try_from(unknowns).is_ok_and(|u| check_memory(u, solver).is_ok());
-    let convex = job.surface.convex_enclosure;
+    let vis = visibility::analyze(&job.surface);
+    let bbox = radcol_core::visibility::base_triangles(&job.surface)
+        .iter()
+        .flatten()
+        .fold(
+            ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
+            |(lo, hi), v| {
+                (
+                    [lo[0].min(v.x), lo[1].min(v.y), lo[2].min(v.z)],
+                    [hi[0].max(v.x), hi[1].max(v.y), hi[2].max(v.z)],
+                )
+            },
+        );
+    let contents = job.loaded.scene().map(|sc| {
+        let areas = sc.patch_areas();
+        let materials = sc
+            .materials
+            .iter()
+            .enumerate()
+            .map(|(m, mat)| {
+                let patches: Vec<usize> = (0..sc.surface.patches.len())
+                    .filter(|&j| sc.patch_material[j] == m)
+                    .collect();
+                MaterialInfo {
+                    name: mat.name.clone(),
+                    rho: mat.rho,
+                    emission: mat.emission,
+                    triangles: patches
+                        .iter()
+                        .map(|&j| sc.surface.patches[j].triangles.len())
+                        .sum(),
+                    area: patches.iter().map(|&j| areas[j]).sum(),
+                }
+            })
+            .collect();
+        SceneInfo {
+            source: sc.source.as_ref().map(|p| p.display().to_string()),
+            triangles: sc.triangle_count(),
+            vertices: sc.vertex_count(),
+            materials,
+            emitters: sc
+                .emitters()
+                .into_iter()
+                .map(|j| sc.surface.patches[j].name.clone())
+                .collect(),
+            warnings: sc.warnings.clone(),
+        }
+    });
+    let estimate = estimate_assembly(&job, elements);
     let rep = InfoReport {
         scene: job.scene.clone(),
         level: job.level,
+        max_edge: job.max_edge,
         degree: job.degree,
         elements,
         patches: job.surface.patches.len(),
         base_triangles: base as usize,
-        h,
+        h: mesh.h() / shrink,
+        element_size: ElementSize {
+            min: sizes.iter().copied().fold(f64::INFINITY, f64::min) / shrink,
+            mean: sizes.iter().sum::<f64>() / sizes.len().max(1) as f64 / shrink,
+            max: sizes.iter().copied().fold(0.0, f64::max) / shrink,
+        },
         shape_ratio: ShapeRatio { min: lo, max: hi },
         area: mesh.area(),
+        bounding_box: BoundingBox {
+            min: bbox.0,
+            max: bbox.1,
+        },
         measured_level,
         unknowns,
         memory: Memory {
@@ -179,12 +257,9 @@ fn run_info(job: InfoJob, w: &mut dyn Write) -> Result<()> {
             fits_gmres: unknowns < 1_000_000_000 && fits(SolverKind::Gmres),
             fits_lu: unknowns < 1_000_000_000 && fits(SolverKind::Lu),
         },
-        convex_enclosure: convex,
-        visibility: if convex {
-            "visibility not needed: the surface bounds a convex set".into()
-        } else {
-            "visibility tests needed: parts of the surface may occlude others".into()
-        },
+        visibility: vis,
+        contents,
+        estimate,
     };
     if job.json {
         print_json(w, &serde_json::to_value(&rep)?)
@@ -192,4 +267,51 @@ fn run_info(job: InfoJob, w: &mut dyn Write) -> Result<()> {
         report::info_text(w, &rep)?;
         Ok(())
     }
+}
+
+/// Row blocks timed by `radcol info` to estimate the assembly time.
+const INFO_SAMPLE_BLOCKS: usize = 24;
+/// Largest mesh whose assembly `radcol info` plans (the plan holds n² classes).
+const INFO_MAX_PLANNED_ELEMENTS: u64 = 6000;
+
+/// Plans the assembly at the job's level and times a few row blocks spread
+/// over the mesh on this machine's CPU, extrapolating to all blocks on all
+/// threads; None when the mesh is too large to plan here.
+fn estimate_assembly(job: &InfoJob, elements: u64) -> Option<Estimate> {
+    if elements > INFO_MAX_PLANNED_ELEMENTS {
+        return None;
+    }
+    let mesh = Arc::new(match job.max_edge {
+        Some(h) => Mesh::with_max_edge(Arc::clone(&job.surface), job.level, h),
+        None => Mesh::new(Arc::clone(&job.surface), job.level),
+    });
+    let nodes = NodeSet::new(job.degree, auto_alpha(job.degree)).ok()?;
+    let disc = Arc::new(Discretization::new(mesh, nodes));
+    let t = Instant::now();
+    let plan = AssemblyPlan::new(disc.clone(), QuadratureOptions::default());
+    let plan_s = t.elapsed().as_secs_f64();
+    let n = disc.mesh().len();
+    let f = disc.nodes_per_element();
+    let samples = n.min(INFO_SAMPLE_BLOCKS);
+    let mut block = vec![0.0; f * disc.len()];
+    let t = Instant::now();
+    for i in 0..samples {
+        plan.fill_block(i * n / samples, &mut block, FillMode::All);
+    }
+    let per_block = t.elapsed().as_secs_f64() / samples.max(1) as f64;
+    let threads = rayon::current_num_threads();
+    let stats = plan.stats();
+    let nn = disc.len() as f64;
+    Some(Estimate {
+        plan_s,
+        assembly_s: plan_s + per_block * n as f64 / threads as f64,
+        sampled_blocks: samples,
+        threads,
+        pairs_far: stats.pairs_far,
+        pairs_near: stats.pairs_near,
+        pairs_partial: stats.pairs_partial,
+        pairs_culled: stats.pairs_culled,
+        gmres_flops_per_iteration: 2.0 * nn * nn,
+        lu_flops: 2.0 / 3.0 * nn * nn * nn,
+    })
 }

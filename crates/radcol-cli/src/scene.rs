@@ -1,11 +1,14 @@
-//! Scene names on the command line -> core surfaces.
+//! Scene names on the command line -> core surfaces and material scenes.
 
 use crate::error::{bad_input, BadInput};
 use radcol_core::geometry::{shapes, Surface};
+use radcol_core::scene::{builtin, load_obj, Scene, BUILTIN_SCENES};
+use std::path::PathBuf;
+use std::sync::Arc;
 
 /// The forms a SCENE argument may take, for error messages.
-pub const VALID_FORMS: &str = "sphere, sphere:R, ellipsoid:A,B,C, box:LX,LY,LZ \
-(cornell and FILE.obj are accepted but not yet supported)";
+pub const VALID_FORMS: &str = "sphere, sphere:R, ellipsoid:A,B,C, box:LX,LY,LZ, \
+the built-in scenes cornell, room, plates, or FILE.obj";
 
 /// A parsed SCENE argument.
 #[derive(Clone, Debug, PartialEq)]
@@ -16,16 +19,53 @@ pub enum SceneSpec {
     Ellipsoid(f64, f64, f64),
     /// The room [0,lx]×[0,ly]×[0,lz].
     Box(f64, f64, f64),
-    /// A mesh file (or the built-in Cornell box, which will be one).
-    Obj(String),
+    /// A built-in OBJ scene (see [`BUILTIN_SCENES`]).
+    Builtin(String),
+    /// An OBJ file.
+    Obj(PathBuf),
+}
+
+/// What a SCENE argument loads to: a bare surface (ρ and E from the command
+/// line) or a scene with materials (ρ = Kd, E = Ke per colour channel).
+#[derive(Clone, Debug)]
+pub enum Loaded {
+    /// An analytic surface.
+    Surface(Arc<Surface>),
+    /// A triangle scene with materials.
+    Scene(Arc<Scene>),
+}
+
+impl Loaded {
+    /// The surface either way.
+    pub fn surface(&self) -> &Arc<Surface> {
+        match self {
+            Loaded::Surface(s) => s,
+            Loaded::Scene(s) => &s.surface,
+        }
+    }
+
+    /// The scene, when there are materials.
+    pub fn scene(&self) -> Option<&Arc<Scene>> {
+        match self {
+            Loaded::Surface(_) => None,
+            Loaded::Scene(s) => Some(s),
+        }
+    }
 }
 
 impl SceneSpec {
-    /// Parses `sphere`, `sphere:R`, `ellipsoid:A,B,C`, `box:LX,LY,LZ`, `cornell`, `*.obj`.
+    /// Parses `sphere`, `sphere:R`, `ellipsoid:A,B,C`, `box:LX,LY,LZ`, a
+    /// built-in scene name, or a path ending in `.obj`.
     pub fn parse(text: &str) -> Result<Self, BadInput> {
         let text = text.trim();
-        if text.eq_ignore_ascii_case("cornell") || text.to_ascii_lowercase().ends_with(".obj") {
-            return Ok(SceneSpec::Obj(text.to_string()));
+        if text.to_ascii_lowercase().ends_with(".obj") {
+            return Ok(SceneSpec::Obj(PathBuf::from(text)));
+        }
+        if let Some((name, _)) = BUILTIN_SCENES
+            .iter()
+            .find(|(name, _)| name.eq_ignore_ascii_case(text))
+        {
+            return Ok(SceneSpec::Builtin(name.to_string()));
         }
         let (kind, params) = match text.split_once(':') {
             Some((k, p)) => (k.trim().to_ascii_lowercase(), Some(p)),
@@ -54,16 +94,29 @@ impl SceneSpec {
         }
     }
 
-    /// The core surface of this scene.
-    pub fn surface(&self) -> Result<Surface, BadInput> {
-        match *self {
-            SceneSpec::Sphere(r) => Ok(shapes::sphere(r)),
-            SceneSpec::Ellipsoid(a, b, c) => Ok(shapes::ellipsoid(a, b, c)),
-            SceneSpec::Box(a, b, c) => Ok(shapes::box_room(a, b, c)),
-            SceneSpec::Obj(ref path) => Err(bad_input(format!(
-                "OBJ scenes are not yet supported (coming with the OBJ scene work): {path}"
-            ))),
-        }
+    /// True for scenes whose materials give ρ and E.
+    pub fn has_materials(&self) -> bool {
+        matches!(self, SceneSpec::Builtin(_) | SceneSpec::Obj(_))
+    }
+
+    /// Builds or reads the scene. OBJ errors (file, line, value) are bad input.
+    pub fn load(&self) -> Result<Loaded, BadInput> {
+        let scene = match *self {
+            SceneSpec::Sphere(r) => return Ok(Loaded::Surface(Arc::new(shapes::sphere(r)))),
+            SceneSpec::Ellipsoid(a, b, c) => {
+                return Ok(Loaded::Surface(Arc::new(shapes::ellipsoid(a, b, c))))
+            }
+            SceneSpec::Box(a, b, c) => {
+                return Ok(Loaded::Surface(Arc::new(shapes::box_room(a, b, c))))
+            }
+            SceneSpec::Builtin(ref name) => {
+                builtin(name).expect("parse accepts only built-in names")
+            }
+            SceneSpec::Obj(ref path) => load_obj(path),
+        };
+        scene
+            .map(|s| Loaded::Scene(Arc::new(s)))
+            .map_err(|e| bad_input(e.to_string()))
     }
 }
 
@@ -115,10 +168,14 @@ mod tests {
             SceneSpec::parse("box:1,1,2").unwrap(),
             SceneSpec::Box(1.0, 1.0, 2.0)
         );
-        assert!(matches!(
-            SceneSpec::parse("cornell").unwrap(),
-            SceneSpec::Obj(_)
-        ));
+        assert_eq!(
+            SceneSpec::parse("Cornell").unwrap(),
+            SceneSpec::Builtin("cornell".into())
+        );
+        assert_eq!(
+            SceneSpec::parse("plates").unwrap(),
+            SceneSpec::Builtin("plates".into())
+        );
         assert!(matches!(
             SceneSpec::parse("room.OBJ").unwrap(),
             SceneSpec::Obj(_)
@@ -133,6 +190,8 @@ mod tests {
         assert!(msg("sphere:-1").contains("> 0"));
         assert!(msg("sphere:inf").contains("finite"));
         assert!(msg("ellipsoid:1,x,2").contains("'x' is not a number"));
-        assert!(SceneSpec::parse("cornell").unwrap().surface().is_err());
+        let missing = SceneSpec::parse("no/such/file.obj").unwrap().load();
+        let msg = missing.unwrap_err().to_string();
+        assert!(msg.contains("no/such/file.obj"), "{msg}");
     }
 }

@@ -11,6 +11,7 @@ use crate::norms::{error_norms, ErrorNorms};
 use crate::problem::{Field, Problem};
 use crate::solution::{integrate_nodal, Solution};
 use crate::solve::{gmres, DenseLu, GmresParams, LinearOperator, RadiosityOperator};
+use crate::visibility::{self, VisibilityAnalysis};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::sync::Arc;
@@ -24,6 +25,36 @@ pub enum SolverKind {
     Gmres,
     /// Dense LU (faer), one factorisation per distinct ρ.
     Lu,
+}
+
+/// Observer of a solve's progress, for progress bars. Called from worker
+/// threads; must be cheap.
+pub trait Progress: Send + Sync {
+    /// A stage starts ("assembly": row blocks, "solve": channels); `total`
+    /// units of work follow.
+    fn start(&self, stage: &str, total: u64);
+    /// `n` more units of the current stage are done.
+    fn advance(&self, n: u64);
+}
+
+/// A shared [`Progress`] observer.
+#[derive(Clone)]
+pub struct ProgressHandle(pub Arc<dyn Progress>);
+
+impl std::fmt::Debug for ProgressHandle {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("ProgressHandle")
+    }
+}
+
+impl ProgressHandle {
+    fn start(&self, stage: &str, total: u64) {
+        self.0.start(stage, total)
+    }
+    /// Reports `n` more units done.
+    pub fn advance(&self, n: u64) {
+        self.0.advance(n)
+    }
 }
 
 /// Everything that sets up one discretization and solve.
@@ -46,6 +77,8 @@ pub struct SolveConfig {
     /// After the uniform `level`, refine elements 4:1 until every mapped edge
     /// is at most this long (scene units); None: uniform refinement only.
     pub max_edge: Option<f64>,
+    /// Progress observer (assembly row blocks, channels solved), if any.
+    pub progress: Option<ProgressHandle>,
 }
 
 impl Default for SolveConfig {
@@ -59,6 +92,7 @@ impl Default for SolveConfig {
             quad: QuadratureOptions::default(),
             check_memory: true,
             max_edge: None,
+            progress: None,
         }
     }
 }
@@ -125,6 +159,8 @@ pub struct SolveOutcome {
     pub backend: BackendInfo,
     /// Pair statistics of the plan.
     pub plan: PlanStats,
+    /// Whether visibility was modelled, and why.
+    pub visibility: VisibilityAnalysis,
     /// Kernel evaluations of the assembly.
     pub kernel_evals: u64,
     /// Device seconds of the assembly, when measured.
@@ -188,10 +224,32 @@ fn eval_at_nodes(disc: &Discretization, field: &Field, what: &str) -> Result<Vec
     Ok(values)
 }
 
-/// Builds the mesh and assembles the geometric matrix for `cfg` with `backend`.
+/// Refuses surfaces whose occlusion radcol cannot model: visibility is
+/// computed exactly for flat elements only, so a curved patch in a surface that
+/// is not known to bound a convex set is an error, not a silently wrong answer.
+pub fn check_visibility_supported(
+    surface: &crate::geometry::Surface,
+) -> Result<VisibilityAnalysis, InputError> {
+    let v = visibility::analyze(surface);
+    if v.needed {
+        if let Some(p) = surface.patches.iter().find(|p| !p.map.is_affine()) {
+            return Err(InputError::Other(format!(
+                "surface '{}': patch '{}' is curved and the surface is not known to bound a convex set; \
+                 radcol models occlusion between flat triangles only (set Surface::convex_enclosure \
+                 when the surface does bound a convex set)",
+                surface.name, p.name
+            )));
+        }
+    }
+    Ok(v)
+}
+
+/// Builds the mesh and collocation points for `cfg` (refusing sizes that do
+/// not fit in memory and occluding curved surfaces).
 pub fn discretize(problem: &Problem, cfg: &SolveConfig) -> Result<Arc<Discretization>, Error> {
     let nodes = NodeSet::new(cfg.degree, cfg.alpha)?;
     let surface = &problem.surface;
+    check_visibility_supported(surface)?;
     let elements = match cfg.max_edge {
         None => {
             (surface.base_triangle_count() as u64).saturating_mul(4u64.saturating_pow(cfg.level))
@@ -262,13 +320,20 @@ pub fn solve(
     let rhs_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let plan = AssemblyPlan::new(disc.clone(), cfg.quad.clone());
+    let mut plan = AssemblyPlan::new(disc.clone(), cfg.quad.clone());
+    if let Some(p) = &cfg.progress {
+        p.start("assembly", disc.mesh().len() as u64);
+        plan.set_progress(p.clone());
+    }
     let assembled = backend.assemble(&plan)?;
     let assembly_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
     let mut channels = Vec::new();
     let mut lu_cache: Option<(Vec<f64>, DenseLu)> = None;
+    if let Some(p) = &cfg.progress {
+        p.start("solve", problem.channels.len() as u64);
+    }
     for (ch, (rho, emission)) in problem.channels.iter().zip(fields) {
         let op = RadiosityOperator::new(&assembled.matrix, &rho)?;
         let mut x = emission.clone();
@@ -300,6 +365,9 @@ pub fn solve(
             },
             errors: None,
         });
+        if let Some(p) = &cfg.progress {
+            p.advance(1);
+        }
     }
     let solve_s = t.elapsed().as_secs_f64();
 
@@ -313,6 +381,7 @@ pub fn solve(
         h,
         backend: backend.info(),
         plan: plan.stats(),
+        visibility: plan.visibility().clone(),
         kernel_evals: assembled.kernel_evals,
         device_seconds: assembled.device_seconds,
         matrix: assembled.matrix,

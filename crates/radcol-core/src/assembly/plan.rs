@@ -108,6 +108,7 @@ pub struct AssemblyPlan {
     visibility: VisibilityAnalysis,
     occluders: Option<Occluders>,
     partial: Vec<PartialRow>,
+    progress: Option<crate::run::ProgressHandle>,
 }
 
 /// The partial pairs of one row block: elements (ascending) and their
@@ -259,7 +260,14 @@ impl AssemblyPlan {
             visibility,
             occluders,
             partial,
+            progress: None,
         }
+    }
+
+    /// Reports every row block filled in [`FillMode::All`] or
+    /// [`FillMode::SpecialOnly`] to `progress` (one unit per block).
+    pub fn set_progress(&mut self, progress: crate::run::ProgressHandle) {
+        self.progress = Some(progress);
     }
 
     /// Whether this plan models visibility, and why.
@@ -459,6 +467,11 @@ impl AssemblyPlan {
                 _ => {}
             }
             k = end;
+        }
+        if mode != FillMode::FarOnly {
+            if let Some(p) = &self.progress {
+                p.advance(1);
+            }
         }
         evals
     }
