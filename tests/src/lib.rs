@@ -126,3 +126,43 @@ pub fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
     let den: f64 = b.iter().map(|y| y * y).sum::<f64>().sqrt();
     num / den
 }
+
+/// Index of the collocation node at `x` (to 1e-12 of the scene size).
+pub fn node_at(out: &radcol_core::run::SolveOutcome, x: glam::DVec3, scale: f64) -> usize {
+    let pts = out.discretization.points();
+    let (i, d) = pts
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (i, (p.position - x).length()))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap();
+    assert!(d <= 1e-12 * scale, "no node at {x} (nearest {d:.3e} away)");
+    i
+}
+
+/// Checks u(m(P)) = u(P) for every node P and every channel, where `m` maps
+/// the node set onto itself.
+#[track_caller]
+pub fn assert_symmetric(
+    out: &radcol_core::run::SolveOutcome,
+    m: impl Fn(glam::DVec3) -> glam::DVec3,
+    what: &str,
+    tol: f64,
+) {
+    let mut worst = 0.0f64;
+    for (i, p) in out.discretization.points().iter().enumerate() {
+        let j = node_at(out, m(p.position), 1.0);
+        for ch in &out.channels {
+            let (a, b) = (ch.solution.nodal()[i], ch.solution.nodal()[j]);
+            worst = worst.max((a - b).abs() / a.abs().max(1e-300));
+            assert!(
+                (a - b).abs() <= tol * a.abs(),
+                "{what}, channel {}: u = {a} at {} but {b} at its image {}",
+                ch.name,
+                p.position,
+                out.discretization.points()[j].position
+            );
+        }
+    }
+    println!("{what}: max relative asymmetry {worst:.2e}");
+}

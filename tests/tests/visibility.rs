@@ -17,7 +17,7 @@ use radcol_core::assembly::{AssemblyBackend, CpuBackend, QuadratureOptions};
 use radcol_core::run::{solve, SolveConfig, SolveOutcome, SolverKind};
 use radcol_core::scene::{Material, Scene, SceneBuilder};
 use radcol_core::visibility::analyze;
-use radcol_tests::assert_close;
+use radcol_tests::{assert_close, assert_symmetric};
 
 /// The 12 triangles of the axis-aligned box [lo, hi], normals pointing out
 /// (`inward` false) or in.
@@ -148,6 +148,24 @@ fn closed_room_with_a_cube_balances_energy() {
             previous[c] = imbalance;
         }
     }
+}
+
+/// The room with the cube is symmetric under x ↔ y, triangulation included:
+/// so is its solution, shadows and all.
+#[test]
+fn occluded_symmetric_scene_gives_symmetric_radiosity() {
+    let scene = room_with_cube(
+        Material::diffuse("walls", [0.7, 0.5, 0.3]),
+        Material::emitter("cube", [0.2; 3], [1.0, 2.0, 3.0]),
+    );
+    let out = run(&scene, &cfg(1, 1), &CpuBackend);
+    assert!(out.plan.pairs_partial > 0);
+    assert_symmetric(
+        &out,
+        |x| DVec3::new(x.y, x.x, x.z),
+        "room with cube: x <-> y",
+        1e-12,
+    );
 }
 
 /// ∫ over the rectangle [x1, x2] × [y1, y2] at height h of cosθ cosθ' / (π r²),
