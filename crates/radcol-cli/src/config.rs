@@ -134,8 +134,9 @@ pub struct Output {
 /// Camera, image and tone-mapping settings for the outputs people look at.
 #[derive(Clone, Debug)]
 pub struct Look {
-    /// The camera of the images.
-    pub camera: Camera,
+    /// The camera of the images: --camera, else the scene's, else chosen from
+    /// the solved mesh ([`radcol_core::render::auto_camera`]).
+    pub camera: Option<Camera>,
     /// Image size and sampling.
     pub render: RenderOptions,
     /// Exposure and tone curve of 8-bit outputs.
@@ -296,8 +297,8 @@ fn output(path: &Path, force: bool) -> Result<Output, BadInput> {
 /// is asked for, so that a typo never waits for a solve.
 fn look(a: &SolveArgs, s: &Setup) -> Result<Look, BadInput> {
     let camera = match &a.camera {
-        Some(text) => Camera::parse(text).map_err(|e| bad_input(format!("--camera: {e}")))?,
-        None => default_camera(&s.loaded),
+        Some(text) => Some(Camera::parse(text).map_err(|e| bad_input(format!("--camera: {e}")))?),
+        None => s.loaded.scene().and_then(|sc| sc.camera),
     };
     for (flag, v) in [
         ("--width", a.width),
@@ -365,34 +366,6 @@ pub fn parse_exposure(text: &str) -> Result<ToneMap, BadInput> {
         auto,
         ..ToneMap::default()
     })
-}
-
-/// The scene's camera, or for a bare surface one at the centre of its
-/// bounding box looking along +z (analytic surfaces are enclosures, seen
-/// from inside), with a 90° field of view.
-pub fn default_camera(loaded: &Loaded) -> Camera {
-    match loaded {
-        Loaded::Scene(s) => s.camera_or_default(),
-        Loaded::Surface(surface) => {
-            let (lo, hi) = radcol_core::visibility::base_triangles(surface)
-                .iter()
-                .flatten()
-                .fold(
-                    (
-                        glam::DVec3::splat(f64::INFINITY),
-                        glam::DVec3::splat(f64::NEG_INFINITY),
-                    ),
-                    |(lo, hi), v| (lo.min(*v), hi.max(*v)),
-                );
-            let centre = (lo + hi) * 0.5;
-            Camera {
-                eye: centre,
-                target: centre + glam::DVec3::Z,
-                up: glam::DVec3::Y,
-                fov_y_deg: 90.0,
-            }
-        }
-    }
 }
 
 fn study_job(a: StudyArgs) -> Result<StudyJob> {

@@ -41,12 +41,8 @@ pub fn write_all(
                     look.render.width, look.render.height, look.render.samples
                 ));
             }
-            image = Some(render::render(
-                mesh,
-                &solutions,
-                &look.camera,
-                &look.render,
-            )?);
+            let camera = look.camera.unwrap_or_else(|| render::auto_camera(mesh));
+            image = Some(render::render(mesh, &solutions, &camera, &look.render)?);
         }
         if matches!(o.kind, OutputKind::Ply | OutputKind::Glb | OutputKind::Gltf)
             && vertices.is_none()

@@ -1,10 +1,12 @@
 //! Embedding radcol: a scene from vertex and index buffers, solved in three
-//! colour channels, printed per collocation node.
+//! colour channels, printed per collocation node, then handed back as
+//! per-vertex colours (for your own renderer) and as a rendered image.
 //!
 //! Run with `cargo run --release -p radcol-core --example embed`.
 
 use glam::Vec3;
 use radcol_core::assembly::CpuBackend;
+use radcol_core::render::{render, tone_map, vertex_mesh, RenderOptions, ToneMap};
 use radcol_core::run::{solve, SolveConfig, SolverKind};
 use radcol_core::scene::{Material, SceneBuilder};
 
@@ -50,5 +52,34 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             patch.name, p.position.x, p.position.y, p.position.z, r[i], g[i], b[i]
         );
     }
+
+    // Per-vertex colours: every element tessellated 2 × 2, u evaluated at the
+    // vertices, tone-mapped to sRGB bytes.
+    let solutions: Vec<_> = outcome.channels.iter().map(|c| &c.solution).collect();
+    let tone = ToneMap::default();
+    let vertices = vertex_mesh(disc.mesh(), &solutions, 2)?;
+    let colours = vertices.srgb8_colors(&tone);
+    println!(
+        "vertex mesh: {} vertices, {} triangles; first colour {:?}",
+        vertices.vertex_count(),
+        vertices.triangle_count(),
+        colours[0]
+    );
+
+    // An image (linear radiance u/π, then 8 bits) from the scene's camera, or
+    // one chosen to show the lit sides of the mesh.
+    let camera = scene.camera_or_auto();
+    let options = RenderOptions {
+        width: 160,
+        height: 120,
+        ..Default::default()
+    };
+    let image = render(disc.mesh(), &solutions, &camera, &options)?;
+    let pixels = tone_map(&image, &tone);
+    let lit = pixels.iter().filter(|p| p.iter().any(|&c| c > 0)).count();
+    println!(
+        "image: {}×{}, {lit} pixels show the scene",
+        image.width, image.height
+    );
     Ok(())
 }

@@ -13,6 +13,11 @@
 //! [`assembly`]), dense solvers ([`solve`]), solutions and error norms
 //! ([`solution`], [`norms`]) and refinement studies ([`study`]).
 //!
+//! For graphics: triangle scenes with materials from OBJ files, vertex buffers
+//! or the built-ins ([`scene`]), occlusion where the geometry needs it
+//! ([`visibility`]: exact clipping of partly hidden elements), and images and
+//! per-vertex colours of the solution ([`render`], [`camera`]).
+//!
 //! ```
 //! use radcol_core::assembly::CpuBackend;
 //! use radcol_core::geometry::shapes::sphere;
@@ -29,6 +34,26 @@
 //!     assert!((u - 2.0).abs() < 1e-10);
 //! }
 //! # Ok::<(), radcol_core::error::Error>(())
+//! ```
+//!
+//! A scene with occlusion, solved in three colour channels and rendered:
+//!
+//! ```
+//! use radcol_core::assembly::CpuBackend;
+//! use radcol_core::render::{render, tone_map, RenderOptions, ToneMap};
+//! use radcol_core::run::{solve, SolveConfig};
+//! use radcol_core::scene::builtin;
+//!
+//! let scene = builtin("cornell").expect("a built-in scene")?;
+//! let config = SolveConfig { degree: 0, level: 0, ..Default::default() };
+//! let outcome = solve(&scene.problem(), &config, &CpuBackend)?;
+//! assert!(outcome.visibility.needed, "the blocks cast shadows");
+//! let rgb: Vec<_> = outcome.channels.iter().map(|c| &c.solution).collect();
+//! let options = RenderOptions { width: 64, height: 48, ..Default::default() };
+//! let image = render(outcome.discretization.mesh(), &rgb, &scene.camera_or_auto(), &options)?;
+//! let pixels: Vec<[u8; 3]> = tone_map(&image, &ToneMap::default());
+//! assert_eq!(pixels.len(), 64 * 48);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 pub mod alpha0;
 pub mod assembly;

@@ -149,6 +149,11 @@ impl ElementBvh {
         }
     }
 
+    /// The bounding box (min, max) of all facets.
+    pub fn bounds(&self) -> (DVec3, DVec3) {
+        (self.lo, self.hi)
+    }
+
     /// Number of flat facets in the hierarchy.
     pub fn facet_count(&self) -> usize {
         self.facets.len()

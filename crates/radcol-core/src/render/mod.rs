@@ -26,6 +26,7 @@ pub use vertex::{vertex_mesh, VertexMesh};
 use crate::camera::Camera;
 use crate::mesh::Mesh;
 use crate::solution::Solution;
+use glam::DVec3;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
@@ -231,6 +232,84 @@ pub fn render_with(
         rgb,
         coverage,
     })
+}
+
+/// Probe rays per axis of each candidate view in [`auto_camera`].
+const PROBE: u32 = 24;
+
+/// A camera that shows the lit side of `mesh`, for scenes that bring none
+/// (an OBJ file has no camera).
+///
+/// Candidates: from outside the bounding box along the 8 diagonals and the 6
+/// axes (far enough back for a 40° field of view to take in the whole box),
+/// then from the box's centre along the 6 axes with a 90° field of view (rooms
+/// are lit inside). Each is scored by the fraction of a 24 × 24 probe grid of
+/// rays that meets front faces, the side light leaves from; the first best
+/// wins, so a scene seen equally well from outside is shown from outside, in
+/// three-quarter view.
+pub fn auto_camera(mesh: &Mesh) -> Camera {
+    let bvh = ElementBvh::new(mesh, 2);
+    let (lo, hi) = bvh.bounds();
+    let centre = (lo + hi) * 0.5;
+    let radius = ((hi - lo).length() * 0.5).max(f64::MIN_POSITIVE);
+    let fov: f64 = 40.0;
+    let distance = radius / (fov.to_radians() * 0.5).sin();
+    let up_for = |d: DVec3| {
+        if d.normalize().cross(DVec3::Y).length() > 1e-3 {
+            DVec3::Y
+        } else {
+            DVec3::Z
+        }
+    };
+    let axes = [
+        DVec3::NEG_Z,
+        DVec3::Z,
+        DVec3::NEG_X,
+        DVec3::X,
+        DVec3::Y,
+        DVec3::NEG_Y,
+    ];
+    let mut candidates = Vec::new();
+    for sx in [-1.0, 1.0] {
+        for sy in [1.0, -1.0] {
+            for sz in [-1.0, 1.0] {
+                let d = DVec3::new(sx, sy * 0.6, sz).normalize();
+                candidates.push((centre + d * distance, centre, fov));
+            }
+        }
+    }
+    for d in axes {
+        candidates.push((centre + d * distance, centre, fov));
+    }
+    for d in axes {
+        candidates.push((centre, centre + d * radius, 90.0));
+    }
+    let score = |cam: &Camera| {
+        let mut front = 0u32;
+        for y in 0..PROBE {
+            for x in 0..PROBE {
+                let dir = cam.ray_direction(x as f64 + 0.5, y as f64 + 0.5, PROBE, PROBE);
+                if bvh.closest_hit(cam.eye, dir).is_some_and(|h| h.front) {
+                    front += 1;
+                }
+            }
+        }
+        front
+    };
+    let mut best: Option<(u32, Camera)> = None;
+    for (eye, target, fov_y_deg) in candidates {
+        let cam = Camera {
+            eye,
+            target,
+            up: up_for(target - eye),
+            fov_y_deg,
+        };
+        let s = score(&cam);
+        if best.as_ref().is_none_or(|(b, _)| s > *b) {
+            best = Some((s, cam));
+        }
+    }
+    best.expect("at least one candidate").1
 }
 
 #[cfg(test)]

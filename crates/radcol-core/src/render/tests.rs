@@ -344,3 +344,35 @@ fn vertex_mesh_values_and_area() {
     assert_eq!(rgb.values[0][1], 3.0);
     assert_eq!(rgb.values[0][0], u.eval(0, 0.0, 0.0) as f32);
 }
+
+/// The automatic camera sees lit faces: from inside for enclosures (sphere,
+/// box room), from outside for the facing plates, whose lit sides face each
+/// other and are seen at an angle.
+#[test]
+fn auto_camera_shows_front_faces() {
+    let front_fraction = |mesh: &Mesh, cam: &Camera| {
+        let bvh = ElementBvh::new(mesh, 2);
+        let mut front = 0;
+        for y in 0..20 {
+            for x in 0..20 {
+                let dir = cam.ray_direction(x as f64 + 0.5, y as f64 + 0.5, 20, 20);
+                if bvh.closest_hit(cam.eye, dir).is_some_and(|h| h.front) {
+                    front += 1;
+                }
+            }
+        }
+        front as f64 / 400.0
+    };
+    let ball = Mesh::new(Arc::new(sphere(1.0)), 1);
+    let cam = auto_camera(&ball);
+    assert!(cam.eye.length() < 1e-12, "inside the sphere: {cam:?}");
+    assert!(front_fraction(&ball, &cam) == 1.0);
+    let room = room(1);
+    let cam = auto_camera(&room);
+    assert!(front_fraction(&room, &cam) == 1.0, "{cam:?}");
+    let plates = crate::scene::builtin("plates").unwrap().unwrap();
+    let mesh = Mesh::new(plates.surface.clone(), 0);
+    let cam = auto_camera(&mesh);
+    assert!(front_fraction(&mesh, &cam) > 0.1, "{cam:?}");
+    assert!(cam.validate().is_ok());
+}

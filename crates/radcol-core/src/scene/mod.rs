@@ -344,23 +344,12 @@ impl Scene {
         }
     }
 
-    /// A camera for the scene: its own, else one looking at the bounding box's
-    /// centre from outside along -z, far enough back to see the whole box.
-    pub fn camera_or_default(&self) -> Camera {
-        if let Some(c) = self.camera {
-            return c;
-        }
-        let (lo, hi) = self.bounding_box();
-        let centre = (lo + hi) * 0.5;
-        let radius = (hi - lo).length() * 0.5;
-        let fov: f64 = 40.0;
-        let distance = radius / (fov.to_radians() * 0.5).sin();
-        Camera {
-            eye: centre - DVec3::Z * distance.max(1e-300),
-            target: centre,
-            up: DVec3::Y,
-            fov_y_deg: fov,
-        }
+    /// A camera for the scene: its own, else one chosen to show the lit sides
+    /// of its triangles ([`crate::render::auto_camera`]).
+    pub fn camera_or_auto(&self) -> Camera {
+        self.camera.unwrap_or_else(|| {
+            crate::render::auto_camera(&crate::mesh::Mesh::new(self.surface.clone(), 0))
+        })
     }
 }
 

@@ -45,7 +45,7 @@ pub fn analyze(surface: &Surface) -> VisibilityAnalysis {
     if surface.convex_enclosure {
         return VisibilityAnalysis {
             needed: false,
-            reason: "no visibility tests: the surface bounds a convex set (known by construction)"
+            reason: "no visibility tests: the surface lies on the boundary of a convex set, facing inward"
                 .into(),
         };
     }
