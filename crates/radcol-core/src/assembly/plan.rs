@@ -492,8 +492,7 @@ fn partly_visible(
     let tol = 1e-12 * occ.scale();
     let side = vb.map(|x| (x - va[0]).dot(na));
     let straddles = side.iter().any(|&d| d > tol) && side.iter().any(|&d| d < -tol);
-    let pts = [va[0], va[1], va[2], vb[0], vb[1], vb[2]];
-    occ.candidates(&pts, &[(va[0], na), (vb[0], nb)], cands);
+    occ.pair_candidates((va, na), (vb, nb), cands);
     straddles || !cands.is_empty()
 }
 
