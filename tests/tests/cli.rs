@@ -580,7 +580,7 @@ fn solve_cornell_writes_every_output() {
     assert_eq!(v["materials"].as_array().unwrap().len(), 4);
     assert_eq!(v["out"].as_array().unwrap().len(), names.len());
     let elements = v["elements"].as_u64().unwrap() as usize;
-    assert_eq!(elements, 38);
+    assert_eq!(elements, 50);
 
     // PNG: the asked size, and the box is lit (the centre ray meets the back wall).
     let decoder = png::Decoder::new(std::io::BufReader::new(
@@ -704,7 +704,7 @@ fn vertex_files_carry_the_solution() {
 fn info_describes_a_scene() {
     let v = stdout_json(&radcol(&["info", "cornell", "--level", "0", "--json"]));
     let c = &v["contents"];
-    assert_eq!(c["triangles"], 38);
+    assert_eq!(c["triangles"], 50);
     assert_eq!(c["materials"].as_array().unwrap().len(), 4);
     assert_eq!(c["emitters"], serde_json::json!(["light/light"]));
     assert_eq!(v["visibility"]["needed"], true);
@@ -726,7 +726,7 @@ fn info_describes_a_scene() {
         "150",
         "--json",
     ]));
-    assert!(v["elements"].as_u64().unwrap() > 38);
+    assert!(v["elements"].as_u64().unwrap() > 50);
     assert!(v["element_size"]["max"].as_f64().unwrap() <= 150.0);
     let v = stdout_json(&radcol(&["info", "room", "--json"]));
     assert_eq!(v["visibility"]["needed"], false);
