@@ -159,6 +159,11 @@ impl AssemblyPlan {
         let occluders = visibility
             .needed
             .then(|| Occluders::new(&visibility::base_triangles(mesh.surface())));
+        let clusters = if occluders.is_some() {
+            clusters(&mesh)
+        } else {
+            Vec::new()
+        };
         let rows: Vec<(Vec<u8>, PartialRow)> = (0..n)
             .into_par_iter()
             .map(|kp| {
@@ -195,27 +200,19 @@ impl AssemblyPlan {
                         None => CLASS_NEAR,
                     }
                 };
-                let mut row = Vec::with_capacity(n);
+                let mut row: Vec<u8> = (0..n).map(classify).collect();
                 let mut partial = PartialRow::default();
-                let mut cands = Vec::new();
-                for k in 0..n {
-                    let mut code = classify(k);
-                    if let Some(occ) = &occluders {
-                        if code != CLASS_CULLED
-                            && code != CLASS_SELF
-                            && balls[kp].2
-                            && balls[k].2
-                            && partly_visible(occ, flat_geom[kp], flat_geom[k], &mut cands)
-                        {
-                            code = CLASS_PARTIAL;
-                            partial.elements.push(k as u32);
-                            partial
-                                .ranges
-                                .push((partial.candidates.len() as u32, cands.len() as u32));
-                            partial.candidates.extend_from_slice(&cands);
-                        }
+                if let (Some(occ), true) = (&occluders, balls[kp].2) {
+                    let walk = Walk {
+                        occ,
+                        a: flat_geom[kp],
+                        mesh: &mesh,
+                        balls,
+                        flat_geom,
+                    };
+                    for c in &clusters {
+                        walk.visit(c.root, c.start..c.end, None, &mut row, &mut partial);
                     }
-                    row.push(code);
                 }
                 (row, partial)
             })
@@ -477,23 +474,169 @@ impl AssemblyPlan {
     }
 }
 
-/// Decides whether the pair (flat element A of the block, flat element B)
-/// needs clipping: B straddles A's tangent plane (the clamped cosine has a
-/// kink inside B), or some occluder meets conv(A ∪ B); `cands` receives the
-/// occluders. Curved elements are never partial (curved scenes that occlude
-/// are refused before assembly).
-fn partly_visible(
-    occ: &Occluders,
-    (va, na): ([glam::DVec3; 3], glam::DVec3),
-    (vb, nb): ([glam::DVec3; 3], glam::DVec3),
-    cands: &mut Vec<u32>,
-) -> bool {
-    cands.clear();
-    let tol = 1e-12 * occ.scale();
+/// True when flat element B straddles the plane of flat element A: the
+/// clamped cosine at A's points has a kink inside B, so B is integrated over
+/// its part in front of each point (curved elements are never partial: curved
+/// scenes that occlude are refused before assembly).
+fn straddles((va, na): ([glam::DVec3; 3], glam::DVec3), vb: [glam::DVec3; 3], scale: f64) -> bool {
+    let tol = 1e-12 * scale;
     let side = vb.map(|x| (x - va[0]).dot(na));
-    let straddles = side.iter().any(|&d| d > tol) && side.iter().any(|&d| d < -tol);
-    occ.pair_candidates((va, na), (vb, nb), cands);
-    straddles || !cands.is_empty()
+    side.iter().any(|&d| d > tol) && side.iter().any(|&d| d < -tol)
+}
+
+/// Consecutive elements inside one base triangle (refinement numbers
+/// descendants consecutively).
+struct Cluster {
+    start: usize,
+    end: usize,
+    root: crate::mesh::Element,
+}
+
+/// The elements of `mesh` grouped by base triangle, for scenes that occlude
+/// (flat patches). Falls back to one cluster per element when the order is
+/// not the refinement's.
+fn clusters(mesh: &crate::mesh::Mesh) -> Vec<Cluster> {
+    let roots: Vec<crate::mesh::Element> = mesh
+        .surface()
+        .patches
+        .iter()
+        .enumerate()
+        .flat_map(|(j, p)| {
+            p.triangles.iter().map(move |&param| crate::mesh::Element {
+                patch: j as u32,
+                param,
+            })
+        })
+        .collect();
+    let mut out = Vec::new();
+    let mut k = 0;
+    for root in roots {
+        let start = k;
+        while k < mesh.len() && inside(mesh, &root, k) {
+            k += 1;
+        }
+        if k > start {
+            out.push(Cluster {
+                start,
+                end: k,
+                root,
+            });
+        }
+    }
+    if k == mesh.len() {
+        return out;
+    }
+    (0..mesh.len())
+        .map(|k| Cluster {
+            start: k,
+            end: k + 1,
+            root: mesh.elements()[k],
+        })
+        .collect()
+}
+
+/// True when element `k`'s parameter centroid lies in `node`'s triangle.
+fn inside(mesh: &crate::mesh::Mesh, node: &crate::mesh::Element, k: usize) -> bool {
+    let e = &mesh.elements()[k];
+    let x = (e.param[0] + e.param[1] + e.param[2]) / 3.0;
+    let [a, b, c] = node.param;
+    e.patch == node.patch && crate::problem::barycentric_st(a, b, c, x).is_some()
+}
+
+/// Finds the partly visible elements of one row block (flat element A) by
+/// walking the refinement tree of every base triangle: an occluder that
+/// misses conv(A ∪ T) for a node T of the tree misses conv(A ∪ B) for every
+/// element B below it, so each node is tested only against its parent's
+/// candidates, and a subtree without any is not descended.
+struct Walk<'a> {
+    occ: &'a Occluders,
+    a: ([glam::DVec3; 3], glam::DVec3),
+    mesh: &'a crate::mesh::Mesh,
+    balls: &'a [(glam::DVec3, f64, bool)],
+    flat_geom: &'a [([glam::DVec3; 3], glam::DVec3)],
+}
+
+impl Walk<'_> {
+    fn live(&self, row: &[u8], k: usize) -> bool {
+        row[k] != CLASS_CULLED && row[k] != CLASS_SELF && self.balls[k].2
+    }
+
+    fn candidates(
+        &self,
+        b: ([glam::DVec3; 3], glam::DVec3),
+        among: Option<&[u32]>,
+        out: &mut Vec<u32>,
+    ) {
+        match among {
+            None => self.occ.pair_candidates(self.a, b, out),
+            Some([]) => {}
+            Some(among) => self.occ.pair_candidates_among(self.a, b, among, out),
+        }
+    }
+
+    fn mark(&self, k: usize, cands: &[u32], row: &mut [u8], partial: &mut PartialRow) {
+        if straddles(self.a, self.flat_geom[k].0, self.occ.scale()) || !cands.is_empty() {
+            row[k] = CLASS_PARTIAL;
+            partial.elements.push(k as u32);
+            partial
+                .ranges
+                .push((partial.candidates.len() as u32, cands.len() as u32));
+            partial.candidates.extend_from_slice(cands);
+        }
+    }
+
+    fn visit(
+        &self,
+        node: crate::mesh::Element,
+        range: std::ops::Range<usize>,
+        among: Option<&[u32]>,
+        row: &mut [u8],
+        partial: &mut PartialRow,
+    ) {
+        if !range.clone().any(|k| self.live(row, k)) {
+            return;
+        }
+        let mut cands = Vec::new();
+        if range.len() == 1 {
+            // The node is the element itself.
+            let k = range.start;
+            self.candidates(self.flat_geom[k], among, &mut cands);
+            self.mark(k, &cands, row, partial);
+            return;
+        }
+        let map = &self.mesh.surface().patches[node.patch as usize].map;
+        let v = node.param.map(|x| map.map(x));
+        let normal = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+        self.candidates((v, normal), among, &mut cands);
+        if cands.is_empty() {
+            for k in range {
+                if self.live(row, k) {
+                    self.mark(k, &[], row, partial);
+                }
+            }
+            return;
+        }
+        let mut k = range.start;
+        for child in node.children() {
+            let start = k;
+            while k < range.end && inside(self.mesh, &child, k) {
+                k += 1;
+            }
+            if k > start {
+                self.visit(child, start..k, Some(&cands), row, partial);
+            }
+        }
+        // Elements not in refinement order (not produced by radcol's meshes):
+        // tested one by one against this node's candidates.
+        let mut one = Vec::new();
+        for k in k..range.end {
+            if self.live(row, k) {
+                one.clear();
+                self.candidates(self.flat_geom[k], Some(&cands), &mut one);
+                self.mark(k, &one, row, partial);
+            }
+        }
+    }
 }
 
 /// Elements per run at most (bounds the kernel buffer).

@@ -135,8 +135,32 @@ impl Occluders {
     /// separating-axis test. Most occluders of a shadowed pair are found so.
     pub fn pair_candidates(
         &self,
+        a: ([DVec3; 3], DVec3),
+        b: ([DVec3; 3], DVec3),
+        out: &mut Vec<u32>,
+    ) {
+        self.pair_candidates_in(a, b, None, out)
+    }
+
+    /// [`Occluders::pair_candidates`] restricted to the occluders `among`
+    /// (sorted), without the BVH: for a triangle B inside a triangle B' whose
+    /// candidates with A are `among`, conv(A ∪ B) ⊂ conv(A ∪ B'), so no other
+    /// occluder can meet it.
+    pub fn pair_candidates_among(
+        &self,
+        a: ([DVec3; 3], DVec3),
+        b: ([DVec3; 3], DVec3),
+        among: &[u32],
+        out: &mut Vec<u32>,
+    ) {
+        self.pair_candidates_in(a, b, Some(among), out)
+    }
+
+    fn pair_candidates_in(
+        &self,
         (a, na): ([DVec3; 3], DVec3),
         (b, nb): ([DVec3; 3], DVec3),
+        among: Option<&[u32]>,
         out: &mut Vec<u32>,
     ) {
         let ca = (a[0] + a[1] + a[2]) / 3.0;
@@ -151,7 +175,19 @@ impl Occluders {
             (a[2], cb),
         ];
         let pts = [a[0], a[1], a[2], b[0], b[1], b[2]];
-        self.candidates_with(&pts, &[(a[0], na), (b[0], nb)], &witnesses, out)
+        let planes = [(a[0], na), (b[0], nb)];
+        match among {
+            None => self.candidates_with(&pts, &planes, &witnesses, out),
+            Some(among) => {
+                let mut hull = None;
+                let tol = REL_TOL * self.scale;
+                for &i in among {
+                    if self.meets_hull(i, &pts, &planes, &witnesses, &mut hull, tol) {
+                        out.push(i);
+                    }
+                }
+            }
+        }
     }
 
     fn candidates_with(
@@ -173,29 +209,7 @@ impl Occluders {
             let node = &bvh.nodes[node_index as usize];
             for slot in node.first_index..node.first_index + node.prim_count {
                 let i = bvh.primitive_indices[slot as usize];
-                let t = &self.tris[i as usize];
-                let coplanar = own_planes
-                    .iter()
-                    .any(|&(p, n)| t.v.iter().all(|v| (*v - p).dot(n).abs() <= tol));
-                if coplanar {
-                    continue;
-                }
-                // The occluder's own plane first: most candidates of the
-                // box test lie wholly on one side of it.
-                let (mut below, mut above) = (false, false);
-                for p in pts {
-                    let d = (*p - t.v[0]).dot(t.normal);
-                    below |= d < -tol;
-                    above |= d > tol;
-                }
-                if !(below && above) {
-                    continue;
-                }
-                if witnesses.iter().any(|&(p, q)| crosses(p, q, t, tol))
-                    || hull
-                        .get_or_insert_with(|| HullAxes::new(pts))
-                        .meets(pts, t, tol)
-                {
+                if self.meets_hull(i, pts, own_planes, witnesses, &mut hull, tol) {
                     out.push(i);
                 }
             }
@@ -203,6 +217,40 @@ impl Occluders {
         });
         out.sort_unstable();
         out.dedup();
+    }
+
+    /// The exact test of occluder `i` against the interior of conv(`pts`).
+    fn meets_hull(
+        &self,
+        i: u32,
+        pts: &[DVec3],
+        own_planes: &[(DVec3, DVec3)],
+        witnesses: &[(DVec3, DVec3)],
+        hull: &mut Option<HullAxes>,
+        tol: f64,
+    ) -> bool {
+        let t = &self.tris[i as usize];
+        let coplanar = own_planes
+            .iter()
+            .any(|&(p, n)| t.v.iter().all(|v| (*v - p).dot(n).abs() <= tol));
+        if coplanar {
+            return false;
+        }
+        // The occluder's own plane first: most candidates of the box test
+        // lie wholly on one side of it.
+        let (mut below, mut above) = (false, false);
+        for p in pts {
+            let d = (*p - t.v[0]).dot(t.normal);
+            below |= d < -tol;
+            above |= d > tol;
+        }
+        if !(below && above) {
+            return false;
+        }
+        witnesses.iter().any(|&(p, q)| crosses(p, q, t, tol))
+            || hull
+                .get_or_insert_with(|| HullAxes::new(pts))
+                .meets(pts, t, tol)
     }
 }
 
