@@ -5,7 +5,9 @@
 //! Run: `cargo bench -p radcol-benches --bench scenes`.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use radcol_core::assembly::{AssemblyBackend, AssemblyPlan, CpuBackend, QuadratureOptions};
+use radcol_core::assembly::{
+    AssemblyBackend, AssemblyPlan, CpuBackend, QuadratureOptions, VisibilityMode,
+};
 use radcol_core::discretization::Discretization;
 use radcol_core::mesh::Mesh;
 use radcol_core::nodes::NodeSet;
@@ -40,6 +42,20 @@ fn occlusion(c: &mut Criterion) {
         group.bench_function(BenchmarkId::new(format!("{name}_fill"), elements), |b| {
             b.iter(|| CpuBackend.assemble(&plan).unwrap())
         });
+        if plan.stats().pairs_partial > 0 {
+            // The same pairs with V cast as rays at every quadrature point.
+            let rays = AssemblyPlan::new(
+                d.clone(),
+                QuadratureOptions {
+                    visibility: VisibilityMode::Rays,
+                    ..Default::default()
+                },
+            );
+            group.bench_function(
+                BenchmarkId::new(format!("{name}_fill_rays"), elements),
+                |b| b.iter(|| CpuBackend.assemble(&rays).unwrap()),
+            );
+        }
     }
     group.finish();
 }

@@ -13,7 +13,7 @@
 //! * The decision whether a scene needs visibility at all.
 
 use glam::DVec3;
-use radcol_core::assembly::{AssemblyBackend, CpuBackend, QuadratureOptions};
+use radcol_core::assembly::{AssemblyBackend, CpuBackend, QuadratureOptions, VisibilityMode};
 use radcol_core::run::{solve, SolveConfig, SolveOutcome, SolverKind};
 use radcol_core::scene::{Material, Scene, SceneBuilder};
 use radcol_core::visibility::analyze;
@@ -168,6 +168,37 @@ fn occluded_symmetric_scene_gives_symmetric_radiosity() {
     );
 }
 
+/// Exact clipping against rays cast per quadrature point (the textbook way,
+/// `VisibilityMode::Rays`), at the same rules: rays integrate a function that
+/// jumps at the shadow boundary, so the blocker's closed form and the closed
+/// room's unit row sums are met far less accurately.
+#[test]
+fn clipping_is_exact_where_rays_are_not() {
+    let (a, h, rho) = (1.0, 1.0, 0.5);
+    let scene = blocker_scene(a, h, rho);
+    let mut rays = cfg(1, 2);
+    rays.quad.visibility = VisibilityMode::Rays;
+    let clip_err = blocker_error(&run(&scene, &cfg(1, 2), &CpuBackend), a, h, rho).0;
+    let rays_err = blocker_error(&run(&scene, &rays, &CpuBackend), a, h, rho).0;
+    println!("blocker, max |u - ρ F|: clipping {clip_err:.2e}, rays {rays_err:.2e}");
+
+    let m = Material::emitter("m", [0.5; 3], [1.0; 3]);
+    let room = room_with_cube(m.clone(), m);
+    let mut rays = cfg(1, 1);
+    rays.quad.visibility = VisibilityMode::Rays;
+    let row_error = |out: &SolveOutcome| {
+        (0..out.matrix.nrows())
+            .map(|i| (out.matrix.row(i).iter().sum::<f64>() - 1.0).abs())
+            .fold(0.0, f64::max)
+    };
+    let clip_rows = row_error(&run(&room, &cfg(1, 1), &CpuBackend));
+    let rays_rows = row_error(&run(&room, &rays, &CpuBackend));
+    println!("room with cube, max |row sum - 1|: clipping {clip_rows:.2e}, rays {rays_rows:.2e}");
+    assert!(clip_err < 1e-10 && clip_rows < 1e-11);
+    assert!(rays_err > 1e4 * clip_err.max(1e-16), "{rays_err:.2e}");
+    assert!(rays_rows > 1e4 * clip_rows.max(1e-16), "{rays_rows:.2e}");
+}
+
 /// ∫ over the rectangle [x1, x2] × [y1, y2] at height h of cosθ cosθ' / (π r²),
 /// seen from the origin facing up: Hottel's corner formula
 /// F(a, b) = (1/2π) [a/√(1+a²) atan(b/√(1+a²)) + b/√(1+b²) atan(a/√(1+b²))]
@@ -219,9 +250,10 @@ fn view_factor_closed_form_matches_quadrature() {
     assert!((view_factor(-1e8, 1e8, -1e8, 1e8, 1.0) - 1.0).abs() < 1e-7);
 }
 
-#[test]
-fn a_blocker_hides_the_closed_form_part_of_the_light() {
-    let (a, h, rho) = (1.0, 1.0, 0.5);
+/// Emitter z = h (ρ = 0, E = 1) over a floor z = 0 (ρ), both [-a, a]², and a
+/// black blocker x ≥ 0 at z = h/2 wide enough that a segment from the floor
+/// to the light crosses it exactly when x_P + x_Q ≥ 0.
+fn blocker_scene(a: f64, h: f64, rho: f64) -> Scene {
     let mut b = SceneBuilder::new("blocker");
     let light = b
         .add_material(Material::emitter("light", [0.0; 3], [1.0; 3]))
@@ -255,7 +287,30 @@ fn a_blocker_hides_the_closed_form_part_of_the_light() {
         black,
     )
     .unwrap();
-    let scene = b.build().unwrap();
+    b.build().unwrap()
+}
+
+/// Largest |u - ρ F_visible| over the floor nodes, and their number.
+fn blocker_error(out: &SolveOutcome, a: f64, h: f64, rho: f64) -> (f64, usize) {
+    let u = out.channels[0].solution.nodal();
+    let mut worst = 0.0f64;
+    let mut count = 0;
+    for (i, p) in out.discretization.points().iter().enumerate() {
+        let x = p.position;
+        if x.z.abs() > 1e-12 {
+            continue;
+        }
+        let want = rho * view_factor(-a - x.x, (-x.x).min(a) - x.x, -a - x.y, a - x.y, h);
+        worst = worst.max((u[i] - want).abs());
+        count += 1;
+    }
+    (worst, count)
+}
+
+#[test]
+fn a_blocker_hides_the_closed_form_part_of_the_light() {
+    let (a, h, rho) = (1.0, 1.0, 0.5);
+    let scene = blocker_scene(a, h, rho);
     assert!(analyze(&scene.surface).needed);
 
     let mut outs = vec![("cpu", run(&scene, &cfg(2, 2), &CpuBackend))];

@@ -3,13 +3,13 @@
 
 use crate::args::{
     BackendArg, Cli, Command, InfoArgs, NodesArgs, PrecisionArg, ProblemArgs, SolveArgs, SolverArg,
-    StudyArgs, TonemapArg,
+    StudyArgs, TonemapArg, VisibilityArg,
 };
 use crate::error::{bad_input, BadInput};
 use crate::scene::{Loaded, SceneSpec};
 use anyhow::{Context, Result};
 use radcol_core::alpha0::auto_alpha;
-use radcol_core::assembly::{AssemblyBackend, CpuBackend, QuadratureOptions};
+use radcol_core::assembly::{AssemblyBackend, CpuBackend, QuadratureOptions, VisibilityMode};
 use radcol_core::camera::Camera;
 use radcol_core::geometry::Surface;
 use radcol_core::mesh::Mesh;
@@ -525,6 +525,10 @@ fn setup(p: &ProblemArgs, level: u32, max_level: u32, max_edge: Option<f64>) -> 
         },
         quad: QuadratureOptions {
             tol: quad_tol,
+            visibility: match p.visibility {
+                VisibilityArg::Clip => VisibilityMode::Clip,
+                VisibilityArg::Rays => VisibilityMode::Rays,
+            },
             ..QuadratureOptions::default()
         },
         check_memory: true,

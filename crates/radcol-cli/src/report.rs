@@ -117,7 +117,14 @@ pub fn solve_text(
         p.pairs_self,
         p.pairs_culled,
         if out.visibility.needed {
-            format!(", {} partly visible (clipped)", p.pairs_partial)
+            format!(
+                ", {} partly visible ({})",
+                p.pairs_partial,
+                match s.cfg.quad.visibility {
+                    radcol_core::assembly::VisibilityMode::Clip => "clipped",
+                    radcol_core::assembly::VisibilityMode::Rays => "rays per quadrature point",
+                }
+            )
         } else {
             String::new()
         },
@@ -210,6 +217,7 @@ pub fn solve_json(s: &Setup, out: &SolveOutcome, written: &[Written]) -> Value {
             "gmres_restart": s.cfg.gmres.restart,
             "gmres_max_iters": s.cfg.gmres.max_iters,
             "quad_tol": s.cfg.quad.tol,
+            "visibility": s.cfg.quad.visibility,
         },
         "backend": out.backend,
         "solver": out.channels.first().map(|c| &c.solver),

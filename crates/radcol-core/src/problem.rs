@@ -196,6 +196,7 @@ impl ReferenceOperator {
                 tol: 1e-14,
                 max_depth: 16,
                 self_order: 24,
+                ..QuadratureOptions::default()
             },
             smoothness: 8,
             by_patch,

@@ -20,6 +20,22 @@ use glam::DVec3;
 use std::f64::consts::FRAC_1_PI;
 use std::sync::Arc;
 
+/// How partly visible pairs (scenes that occlude) are integrated.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum VisibilityMode {
+    /// Over the exactly clipped visible region of the element (the default):
+    /// the integrand is smooth on every piece, so the rules keep their order.
+    #[default]
+    Clip,
+    /// Over the whole element with V(P, Q) ∈ {0, 1} cast as a ray (a segment
+    /// test against the pair's candidate occluders) at every quadrature point:
+    /// the textbook approach, kept to measure against. The rules then
+    /// integrate a discontinuous function, with O(1/√points)-type errors at
+    /// shadow boundaries.
+    Rays,
+}
+
 /// Accuracy settings for element integrals.
 #[derive(Clone, Debug, PartialEq)]
 pub struct QuadratureOptions {
@@ -29,6 +45,8 @@ pub struct QuadratureOptions {
     pub max_depth: u32,
     /// Gauss points per direction in each Duffy triangle of a self pair.
     pub self_order: usize,
+    /// Partly visible pairs: exact clipping or rays per quadrature point.
+    pub visibility: VisibilityMode,
 }
 
 impl Default for QuadratureOptions {
@@ -37,6 +55,7 @@ impl Default for QuadratureOptions {
             tol: 1e-12,
             max_depth: 14,
             self_order: 20,
+            visibility: VisibilityMode::Clip,
         }
     }
 }

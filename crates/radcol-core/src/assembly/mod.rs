@@ -15,7 +15,7 @@ pub mod integrate;
 pub mod plan;
 
 pub use cpu::CpuBackend;
-pub use integrate::{ElementIntegrator, FieldPoint, QuadratureOptions};
+pub use integrate::{ElementIntegrator, FieldPoint, QuadratureOptions, VisibilityMode};
 pub use plan::{AssemblyPlan, FarTable, FillMode, PlanStats};
 
 use crate::error::Error;

@@ -355,6 +355,17 @@ impl AssemblyPlan {
             on_element: None,
         };
         out.fill(0.0);
+        if self.opts.visibility == super::VisibilityMode::Rays {
+            let seen = |k: usize, st: [f64; 2], q: glam::DVec3, out: &mut [f64]| {
+                if cands.iter().any(|&i| clip::blocks(position, q, occ.get(i))) {
+                    out.fill(0.0);
+                } else {
+                    phi(k, st, q, out);
+                }
+            };
+            let whole = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+            return integrator.integrate_region(&fp, k, whole, r, &seen, out);
+        }
         let mut evals = 0;
         for piece in clip::visible_region(position, normal, &verts, occ, cands) {
             for tri in clip::triangles(&piece) {
