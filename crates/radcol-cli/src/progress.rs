@@ -45,7 +45,7 @@ impl Bar {
 impl Progress for Bar {
     fn start(&self, stage: &str, total: u64) {
         let unit = match stage {
-            "assembly" => "row blocks",
+            "plan" | "assembly" => "row blocks",
             "solve" => "channels",
             _ => "",
         };

@@ -48,7 +48,8 @@ impl std::fmt::Debug for ProgressHandle {
 }
 
 impl ProgressHandle {
-    fn start(&self, stage: &str, total: u64) {
+    /// Starts a stage of `total` units.
+    pub fn start(&self, stage: &str, total: u64) {
         self.0.start(stage, total)
     }
     /// Reports `n` more units done.
@@ -320,10 +321,9 @@ pub fn solve(
     let rhs_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let mut plan = AssemblyPlan::new(disc.clone(), cfg.quad.clone());
+    let plan = AssemblyPlan::with_progress(disc.clone(), cfg.quad.clone(), cfg.progress.clone());
     if let Some(p) = &cfg.progress {
         p.start("assembly", disc.mesh().len() as u64);
-        plan.set_progress(p.clone());
     }
     let assembled = backend.assemble(&plan)?;
     let assembly_s = t.elapsed().as_secs_f64();

@@ -134,6 +134,20 @@ impl PartialRow {
 impl AssemblyPlan {
     /// Classifies every pair and builds the far-rule tables that are used.
     pub fn new(disc: Arc<Discretization>, opts: QuadratureOptions) -> Self {
+        Self::with_progress(disc, opts, None)
+    }
+
+    /// [`AssemblyPlan::new`], reporting each classified row block to
+    /// `progress` (stage "plan"), and then each filled row block (stage
+    /// "assembly" is started by the caller, as [`crate::run::solve`] does).
+    pub fn with_progress(
+        disc: Arc<Discretization>,
+        opts: QuadratureOptions,
+        progress: Option<crate::run::ProgressHandle>,
+    ) -> Self {
+        if let Some(p) = &progress {
+            p.start("plan", disc.mesh().len() as u64);
+        }
         let mesh = disc.mesh().clone();
         let n = mesh.len();
         let f = disc.nodes_per_element();
@@ -214,6 +228,9 @@ impl AssemblyPlan {
                         walk.visit(c.root, c.start..c.end, None, &mut row, &mut partial);
                     }
                 }
+                if let Some(p) = &progress {
+                    p.advance(1);
+                }
                 (row, partial)
             })
             .collect();
@@ -257,7 +274,7 @@ impl AssemblyPlan {
             visibility,
             occluders,
             partial,
-            progress: None,
+            progress,
         }
     }
 
