@@ -201,9 +201,23 @@ impl<'a> ElementIntegrator<'a> {
         let det = (e1[0] * e2[1] - e1[1] * e2[0]).abs();
         let m = out.len();
         let mut buf = [0.0f64; 64];
+        // A flat element is affine in (s, t): position from its mapped
+        // vertices, one normal and one Jacobian, without the map per point.
+        let affine = self.mesh.is_flat(k).then(|| {
+            let [v0, v1, v2] = self.mesh.vertices(k);
+            let q0 = self.mesh.point(k, 0.0, 0.0);
+            (v0, v1 - v0, v2 - v0, q0.normal, q0.jacobian)
+        });
         for (&[x, y], &w) in rule.points.iter().zip(&rule.weights) {
             let st = [a[0] + x * e1[0] + y * e2[0], a[1] + x * e1[1] + y * e2[1]];
-            let q = self.mesh.point(k, st[0], st[1]);
+            let q = match affine {
+                Some((v0, es, et, normal, jacobian)) => crate::mesh::SurfacePoint {
+                    position: v0 + es * st[0] + et * st[1],
+                    normal,
+                    jacobian,
+                },
+                None => self.mesh.point(k, st[0], st[1]),
+            };
             let gw =
                 g(p.position, p.normal, q.position, q.normal) * q.jacobian * w * det * FRAC_1_PI;
             if gw == 0.0 {
