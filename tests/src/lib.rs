@@ -166,3 +166,18 @@ pub fn assert_symmetric(
     }
     println!("{what}: max relative asymmetry {worst:.2e}");
 }
+
+/// Degree `degree` on level `level`, dense LU, element integrals to 1e-13:
+/// the configuration of the scene and visibility identities.
+pub fn lu_config(degree: usize, level: u32) -> SolveConfig {
+    SolveConfig {
+        degree,
+        level,
+        solver: radcol_core::run::SolverKind::Lu,
+        quad: radcol_core::assembly::QuadratureOptions {
+            tol: 1e-13,
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}

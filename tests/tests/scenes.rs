@@ -2,22 +2,13 @@
 //! scale invariance of radiosity (G dS is dimensionless).
 
 use glam::DVec3;
-use radcol_core::assembly::{CpuBackend, QuadratureOptions};
-use radcol_core::run::{solve, SolveConfig, SolveOutcome, SolverKind};
+use radcol_core::assembly::CpuBackend;
+use radcol_core::run::{solve, SolveConfig, SolveOutcome};
 use radcol_core::scene::{builtin, Material, Scene};
 use radcol_tests::assert_symmetric;
 
 fn cfg(degree: usize, level: u32) -> SolveConfig {
-    SolveConfig {
-        degree,
-        level,
-        solver: SolverKind::Lu,
-        quad: QuadratureOptions {
-            tol: 1e-13,
-            ..Default::default()
-        },
-        ..Default::default()
-    }
+    radcol_tests::lu_config(degree, level)
 }
 
 fn run(scene: &Scene, cfg: &SolveConfig) -> SolveOutcome {

@@ -13,8 +13,8 @@
 //! * The decision whether a scene needs visibility at all.
 
 use glam::DVec3;
-use radcol_core::assembly::{AssemblyBackend, CpuBackend, QuadratureOptions, VisibilityMode};
-use radcol_core::run::{solve, SolveConfig, SolveOutcome, SolverKind};
+use radcol_core::assembly::{AssemblyBackend, CpuBackend, VisibilityMode};
+use radcol_core::run::{solve, SolveConfig, SolveOutcome};
 use radcol_core::scene::{Material, Scene, SceneBuilder};
 use radcol_core::visibility::analyze;
 use radcol_tests::{assert_close, assert_symmetric};
@@ -61,16 +61,7 @@ fn room_with_cube(room: Material, cube: Material) -> Scene {
 }
 
 fn cfg(degree: usize, level: u32) -> SolveConfig {
-    SolveConfig {
-        degree,
-        level,
-        solver: SolverKind::Lu,
-        quad: QuadratureOptions {
-            tol: 1e-13,
-            ..Default::default()
-        },
-        ..Default::default()
-    }
+    radcol_tests::lu_config(degree, level)
 }
 
 fn run(scene: &Scene, cfg: &SolveConfig, backend: &dyn AssemblyBackend) -> SolveOutcome {

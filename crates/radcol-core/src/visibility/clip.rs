@@ -85,18 +85,9 @@ const MIN_AREA: f64 = 1e-13;
 
 /// True when the open segment p q crosses the occluder's triangle (for
 /// [`crate::assembly::VisibilityMode::Rays`]): the ends strictly on either
-/// side of its plane and the crossing point inside it.
+/// side of its plane and the crossing point strictly inside it.
 pub fn blocks(p: DVec3, q: DVec3, t: &super::occluders::Occluder) -> bool {
-    let dp = (p - t.v[0]).dot(t.normal);
-    let dq = (q - t.v[0]).dot(t.normal);
-    if !((dp > 0.0 && dq < 0.0) || (dp < 0.0 && dq > 0.0)) {
-        return false;
-    }
-    let x = p + (q - p) * (dp / (dp - dq));
-    (0..3).all(|i| {
-        let (u, v) = (t.v[i], t.v[(i + 1) % 3]);
-        (v - u).cross(x - u).dot(t.normal) >= 0.0
-    })
+    super::occluders::crosses(p, q, t, 0.0)
 }
 
 /// The convex pieces of the flat element `v` that the point `p` (unit normal

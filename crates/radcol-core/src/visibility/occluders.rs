@@ -256,7 +256,7 @@ impl Occluders {
 
 /// True when the segment p q crosses the plane of `t` transversally (its ends
 /// more than `tol` on either side) at a point more than `tol` inside `t`.
-fn crosses(p: DVec3, q: DVec3, t: &Occluder, tol: f64) -> bool {
+pub(crate) fn crosses(p: DVec3, q: DVec3, t: &Occluder, tol: f64) -> bool {
     let dp = (p - t.v[0]).dot(t.normal);
     let dq = (q - t.v[0]).dot(t.normal);
     if !((dp > tol && dq < -tol) || (dp < -tol && dq > tol)) {
