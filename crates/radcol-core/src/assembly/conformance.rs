@@ -3,7 +3,7 @@
 //!
 //! A GPU crate runs [`check_backend`] on its backend; core runs it on an
 //! independent slow path ([`generic_matrix`]) that evaluates every far pair
-//! point by point through [`ElementIntegrator::apply_rule`] and
+//! point by point through [`ElementIntegrator::apply_rule`](super::ElementIntegrator::apply_rule) and
 //! [`crate::kernel::g`] instead of the vectorised run loop.
 
 use super::plan::{CLASS_CULLED, CLASS_NEAR, CLASS_PARTIAL, CLASS_SELF};

@@ -722,7 +722,7 @@ fn contract_fixed<const F: usize>(g: &[f64], basis_t: &[f64], nq: usize, out: &m
     }
 }
 
-/// g[q] = G(P, Q_q) · wj[q] for one collocation point against one element's rule
+/// `g[q] = G(P, Q_q) · wj[q]` for one collocation point against one element's rule
 /// points: the hot loop of far assembly, written over slices so it vectorises.
 #[inline]
 pub fn far_kernel_row(

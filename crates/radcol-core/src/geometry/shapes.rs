@@ -63,7 +63,7 @@ pub fn ellipsoid(a: f64, b: f64, c: f64) -> Surface {
     }
 }
 
-/// The inside of the axis-aligned box [0,lx]×[0,ly]×[0,lz]: six walls, each two
+/// The inside of the axis-aligned box `[0,lx]×[0,ly]×[0,lz]`: six walls, each two
 /// triangles (12 base elements), normals pointing into the room.
 pub fn box_room(lx: f64, ly: f64, lz: f64) -> Surface {
     let p = |x: f64, y: f64, z: f64| DVec3::new(x * lx, y * ly, z * lz);
