@@ -776,3 +776,29 @@ fn scene_input_errors_name_the_file_and_line() {
         assert_one_line_error(&args, 2, &needles);
     }
 }
+
+/// A scene with materials and no --level/--max-edge is refined to edges of a
+/// tenth of its bounding box's diagonal; either flag turns that off.
+#[test]
+fn scenes_get_a_default_refinement() {
+    let v = stdout_json(&radcol(&["solve", "plates", "--backend", "cpu", "--json"]));
+    let diagonal = 3f64.sqrt();
+    assert_eq!(v["level"], 0);
+    assert!((num(&v, "max_edge") - 0.1 * diagonal).abs() < 1e-15);
+    // Each unit square's two triangles have hypotenuse √2: split 4 times
+    // (edges √2/16 < 0.173 < √2/8), 256 elements per triangle.
+    assert_eq!(v["elements"], 4 * 256);
+    let v = stdout_json(&radcol(&[
+        "solve",
+        "plates",
+        "--level",
+        "1",
+        "--backend",
+        "cpu",
+        "--json",
+    ]));
+    assert!(v["max_edge"].is_null());
+    assert_eq!(v["elements"], 16);
+    let v = stdout_json(&radcol(&["info", "plates", "--json"]));
+    assert_eq!(v["elements"], 4 * 256);
+}

@@ -165,12 +165,14 @@ pub struct SolveArgs {
     pub problem: ProblemArgs,
 
     /// Refinement level: each level splits every triangle into 4 (8 elements at level 0 on
-    /// a sphere or ellipsoid, 12 on a box, the file's triangles for a scene).
-    #[arg(long, short = 'l', value_name = "L", default_value_t = 2)]
-    pub level: u32,
+    /// a sphere or ellipsoid, 12 on a box, the file's triangles for a scene) [default: 2;
+    /// for a scene with materials given neither --level nor --max-edge: level 0 and
+    /// --max-edge a tenth of its bounding box's diagonal].
+    #[arg(long, short = 'l', value_name = "L")]
+    pub level: Option<u32>,
 
     /// After the uniform --level, keep splitting elements 4:1 until no edge is longer than H
-    /// (scene units) [default: uniform refinement only].
+    /// (scene units) [default: uniform refinement only, but see --level].
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub max_edge: Option<f64>,
 
@@ -263,9 +265,9 @@ pub struct InfoArgs {
     #[arg(long, short = 'r', value_name = "R", default_value_t = 1)]
     pub degree: usize,
 
-    /// Refinement level.
-    #[arg(long, short = 'l', value_name = "L", default_value_t = 2)]
-    pub level: u32,
+    /// Refinement level [default: as for solve].
+    #[arg(long, short = 'l', value_name = "L")]
+    pub level: Option<u32>,
 
     /// As for solve: split elements until no edge is longer than H.
     #[arg(long, value_name = "H", allow_hyphen_values = true)]

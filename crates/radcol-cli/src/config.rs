@@ -258,7 +258,7 @@ fn solve_job(a: SolveArgs) -> Result<SolveJob> {
         outputs.push(output);
     }
     let max_edge = a.max_edge.map(check_max_edge).transpose()?;
-    let setup = setup(&a.problem, a.level, a.level, max_edge)?;
+    let setup = setup(&a.problem, a.level, None, max_edge)?;
     let look = look(&a, &setup)?;
     Ok(SolveJob {
         setup,
@@ -390,7 +390,7 @@ fn study_job(a: StudyArgs) -> Result<StudyJob> {
             )
         })
         .transpose()?;
-    let setup = setup(&a.problem, *levels.start(), *levels.end(), None)?;
+    let setup = setup(&a.problem, Some(*levels.start()), Some(*levels.end()), None)?;
     Ok(StudyJob {
         setup,
         levels,
@@ -413,13 +413,14 @@ fn info_job(a: InfoArgs) -> Result<InfoJob> {
     warn_scene(&loaded);
     let degree = check_degree(a.degree)?;
     let max_edge = a.max_edge.map(check_max_edge).transpose()?;
+    let (level, max_edge) = default_refinement(&loaded, a.level, max_edge);
     Ok(InfoJob {
         scene: loaded.surface().name.clone(),
         surface: loaded.surface().clone(),
         loaded,
         max_edge,
         degree,
-        level: a.level,
+        level,
         json: a.json,
     })
 }
@@ -434,9 +435,41 @@ fn warn_scene(loaded: &Loaded) {
     }
 }
 
-/// Validates the shared options; `max_level` is the finest level that will be
-/// solved (checked against memory before anything is built).
-fn setup(p: &ProblemArgs, level: u32, max_level: u32, max_edge: Option<f64>) -> Result<Setup> {
+/// Level of `radcol solve` when none is given.
+const DEFAULT_LEVEL: u32 = 2;
+
+/// Scenes with materials given neither --level nor --max-edge are refined to
+/// edges of at most this fraction of their bounding box's diagonal.
+const DEFAULT_EDGE_FRACTION: f64 = 0.1;
+
+/// The level and maximum edge to use: as given, else [`DEFAULT_LEVEL`], or for
+/// a scene with materials given neither, level 0 with edges of at most
+/// [`DEFAULT_EDGE_FRACTION`] of its bounding box's diagonal.
+fn default_refinement(
+    loaded: &Loaded,
+    level: Option<u32>,
+    max_edge: Option<f64>,
+) -> (u32, Option<f64>) {
+    match (level, max_edge, loaded.scene()) {
+        (None, None, Some(scene)) => {
+            let (lo, hi) = scene.bounding_box();
+            (0, Some(DEFAULT_EDGE_FRACTION * (hi - lo).length()))
+        }
+        (level, max_edge, _) => (level.unwrap_or(DEFAULT_LEVEL), max_edge),
+    }
+}
+
+/// Validates the shared options; `level` None means the default refinement
+/// ([`DEFAULT_LEVEL`], or for scenes with materials and no `max_edge`, level 0
+/// with edges of at most [`DEFAULT_EDGE_FRACTION`] of the diagonal);
+/// `max_level` is the finest level that will be solved (checked against memory
+/// before anything is built), `level` when None.
+fn setup(
+    p: &ProblemArgs,
+    level: Option<u32>,
+    max_level: Option<u32>,
+    max_edge: Option<f64>,
+) -> Result<Setup> {
     let spec = SceneSpec::parse(&p.scene)?;
     if spec.has_materials() {
         for (flag, given) in [
@@ -457,6 +490,8 @@ fn setup(p: &ProblemArgs, level: u32, max_level: u32, max_edge: Option<f64>) -> 
     let loaded = spec.load()?;
     warn_scene(&loaded);
     let surface = loaded.surface().clone();
+    let (level, max_edge) = default_refinement(&loaded, level, max_edge);
+    let max_level = max_level.unwrap_or(level);
     radcol_core::run::check_visibility_supported(&surface).map_err(|e| bad_input(e.to_string()))?;
     let degree = check_degree(p.degree)?;
     let alpha = parse_alpha(&p.alpha, degree)?;

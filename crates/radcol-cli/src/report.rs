@@ -57,11 +57,15 @@ pub fn solve_text(
     let p = &out.plan;
     writeln!(
         w,
-        "radcol solve: {}, r = {}, {}, level {}",
+        "radcol solve: {}, r = {}, {}, level {}{}",
         s.scene,
         s.cfg.degree,
         alpha_text(&s.alpha, s.cfg.degree),
-        s.cfg.level
+        s.cfg.level,
+        s.cfg
+            .max_edge
+            .map(|h| format!(", max edge {h:.6}"))
+            .unwrap_or_default()
     )?;
     writeln!(
         w,
@@ -207,6 +211,7 @@ pub fn solve_json(s: &Setup, out: &SolveOutcome, written: &[Written]) -> Value {
         "alpha": s.alpha.value,
         "alpha_auto": s.alpha.auto,
         "level": s.cfg.level,
+        "max_edge": s.cfg.max_edge,
         "elements": disc.mesh().len(),
         "unknowns": disc.len(),
         "h": out.h,
@@ -628,8 +633,13 @@ fn gib(bytes: f64) -> String {
 pub fn info_text(w: &mut dyn Write, i: &InfoReport) -> io::Result<()> {
     writeln!(
         w,
-        "radcol info: {}, level {}, r = {}",
-        i.scene, i.level, i.degree
+        "radcol info: {}, level {}{}, r = {}",
+        i.scene,
+        i.level,
+        i.max_edge
+            .map(|h| format!(", max edge {h:.6}"))
+            .unwrap_or_default(),
+        i.degree
     )?;
     writeln!(w, "  elements        {}", i.elements)?;
     writeln!(w, "  patches         {}", i.patches)?;
