@@ -29,30 +29,7 @@ fn document(mesh: &VertexMesh, tm: &ToneMap, uri: Option<String>) -> Result<(Val
     if nv == 0 || mesh.indices.is_empty() {
         bail!("glTF: the vertex mesh is empty (accessors need at least one element)");
     }
-    if mesh.normals.len() != nv || mesh.values.len() != nv {
-        bail!(
-            "glTF: vertex mesh has {nv} positions, {} normals and {} values",
-            mesh.normals.len(),
-            mesh.values.len()
-        );
-    }
-    if !mesh.indices.len().is_multiple_of(3) {
-        bail!(
-            "glTF: {} triangle indices is not a multiple of 3",
-            mesh.indices.len()
-        );
-    }
-    if let Some((i, &v)) = mesh
-        .indices
-        .iter()
-        .enumerate()
-        .find(|&(_, &v)| v as usize >= nv)
-    {
-        bail!(
-            "glTF: index {i} (triangle {}) = {v} is out of range for {nv} vertices",
-            i / 3
-        );
-    }
+    super::check_vertex_mesh("glTF", mesh, u32::MAX)?;
     if let Some((i, p)) = mesh
         .positions
         .iter()

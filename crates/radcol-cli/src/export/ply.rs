@@ -40,30 +40,7 @@ pub fn write<W: Write>(
 ) -> Result<()> {
     let props = radiosity_properties(channel_names)?;
     let nv = mesh.positions.len();
-    if mesh.normals.len() != nv || mesh.values.len() != nv {
-        bail!(
-            "PLY: vertex mesh has {nv} positions, {} normals and {} values",
-            mesh.normals.len(),
-            mesh.values.len()
-        );
-    }
-    if !mesh.indices.len().is_multiple_of(3) {
-        bail!(
-            "PLY: {} triangle indices is not a multiple of 3",
-            mesh.indices.len()
-        );
-    }
-    if let Some((i, &v)) = mesh
-        .indices
-        .iter()
-        .enumerate()
-        .find(|&(_, &v)| v as usize >= nv || v > i32::MAX as u32)
-    {
-        bail!(
-            "PLY: index {i} (triangle {}) = {v} is out of range for {nv} vertices",
-            i / 3
-        );
-    }
+    super::check_vertex_mesh("PLY", mesh, i32::MAX as u32)?;
     let colors = mesh.srgb8_colors(tm);
     let mut header = String::from("ply\nformat binary_little_endian 1.0\ncomment radcol: radiosity u_n per vertex; colours tone-mapped radiance u/pi\n");
     header += &format!("element vertex {nv}\n");
