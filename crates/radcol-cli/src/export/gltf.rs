@@ -14,6 +14,8 @@
 //! colours are linear; viewers encode on output).
 
 use anyhow::{bail, Result};
+use base64::engine::general_purpose::STANDARD;
+use base64::Engine;
 use radcol_core::render::{ToneMap, VertexMesh};
 use serde_json::{json, Value};
 use std::io::Write;
@@ -123,34 +125,12 @@ pub fn write_gltf<W: Write>(mut w: W, mesh: &VertexMesh, tm: &ToneMap) -> Result
     let (mut doc, bin) = document(mesh, tm, None)?;
     doc["buffers"][0]["uri"] = json!(format!(
         "data:application/octet-stream;base64,{}",
-        base64(&bin)
+        STANDARD.encode(&bin)
     ));
     serde_json::to_writer_pretty(&mut w, &doc)?;
     w.write_all(b"\n")?;
     w.flush()?;
     Ok(())
-}
-
-/// Standard base64 (RFC 4648, with padding).
-fn base64(data: &[u8]) -> String {
-    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::with_capacity(data.len().div_ceil(3) * 4);
-    for chunk in data.chunks(3) {
-        let b = [
-            chunk[0],
-            *chunk.get(1).unwrap_or(&0),
-            *chunk.get(2).unwrap_or(&0),
-        ];
-        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
-        for k in 0..4 {
-            if k <= chunk.len() {
-                out.push(ALPHABET[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
 }
 
 #[cfg(test)]
@@ -169,21 +149,6 @@ mod tests {
     }
 
     /// RFC 4648 test vectors.
-    #[test]
-    fn base64_vectors() {
-        for (i, o) in [
-            ("", ""),
-            ("f", "Zg=="),
-            ("fo", "Zm8="),
-            ("foo", "Zm9v"),
-            ("foob", "Zm9vYg=="),
-            ("fooba", "Zm9vYmE="),
-            ("foobar", "Zm9vYmFy"),
-        ] {
-            assert_eq!(base64(i.as_bytes()), o);
-        }
-    }
-
     /// Reads a file back with the gltf crate (validating) and checks structure and data.
     fn check(bytes: &[u8]) {
         let parsed = ::gltf::Gltf::from_slice(bytes).unwrap();
