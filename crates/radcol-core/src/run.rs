@@ -11,7 +11,9 @@ use crate::norms::{error_norms, ErrorNorms};
 use crate::problem::{Field, Problem};
 use crate::solution::{integrate_nodal, Solution};
 use crate::solve::{gmres, DenseLu, GmresParams, LinearOperator, RadiosityOperator};
-use crate::visibility::{self, VisibilityAnalysis};
+#[cfg(doc)]
+use crate::visibility;
+use crate::visibility::VisibilityAnalysis;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::sync::Arc;
@@ -228,21 +230,21 @@ fn eval_at_nodes(disc: &Discretization, field: &Field, what: &str) -> Result<Vec
 /// Refuses surfaces whose occlusion radcol cannot model: visibility is
 /// computed exactly for flat elements only, so a curved patch in a surface that
 /// is not known to bound a convex set is an error, not a silently wrong answer.
-pub fn check_visibility_supported(
-    surface: &crate::geometry::Surface,
-) -> Result<VisibilityAnalysis, InputError> {
-    let v = visibility::analyze(surface);
-    if v.needed {
-        if let Some(p) = surface.patches.iter().find(|p| !p.map.is_affine()) {
-            return Err(InputError::Other(format!(
-                "surface '{}': patch '{}' is curved and the surface is not known to bound a convex set; \
-                 radcol models occlusion between flat triangles only (set Surface::convex_enclosure \
-                 when the surface does bound a convex set)",
-                surface.name, p.name
-            )));
-        }
+/// (Such a surface is exactly one that [`visibility::analyze`] marks as needing
+/// visibility because of a curved patch; no geometric test is run here.)
+pub fn check_visibility_supported(surface: &crate::geometry::Surface) -> Result<(), InputError> {
+    if surface.convex_enclosure {
+        return Ok(());
     }
-    Ok(v)
+    match surface.patches.iter().find(|p| !p.map.is_affine()) {
+        Some(p) => Err(InputError::Other(format!(
+            "surface '{}': patch '{}' is curved and the surface is not known to bound a convex set; \
+             radcol models occlusion between flat triangles only (set Surface::convex_enclosure \
+             when the surface does bound a convex set)",
+            surface.name, p.name
+        ))),
+        None => Ok(()),
+    }
 }
 
 /// Builds the mesh and collocation points for `cfg` (refusing sizes that do
@@ -454,5 +456,25 @@ mod tests {
                 "{err}"
             );
         }
+    }
+
+    /// A curved surface not known to bound a convex set is refused (radcol
+    /// cannot clip curved elements); flat ones that occlude are accepted.
+    #[test]
+    fn occluding_curved_surfaces_are_refused() {
+        let mut open_sphere = crate::geometry::shapes::sphere(1.0);
+        open_sphere.convex_enclosure = false;
+        let problem = |s| Problem::new(Arc::new(s), Field::Constant(0.5), Field::Constant(1.0));
+        let cfg = SolveConfig {
+            level: 0,
+            ..Default::default()
+        };
+        let msg = discretize(&problem(open_sphere), &cfg)
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("curved") && msg.contains("octant"), "{msg}");
+        let flat = crate::assembly::conformance::room_with_cube();
+        assert!(crate::visibility::analyze(&flat).needed);
+        assert!(discretize(&problem(flat), &cfg).is_ok());
     }
 }

@@ -278,12 +278,6 @@ impl AssemblyPlan {
         }
     }
 
-    /// Reports every row block filled in [`FillMode::All`] or
-    /// [`FillMode::SpecialOnly`] to `progress` (one unit per block).
-    pub fn set_progress(&mut self, progress: crate::run::ProgressHandle) {
-        self.progress = Some(progress);
-    }
-
     /// Whether this plan models visibility, and why.
     pub fn visibility(&self) -> &VisibilityAnalysis {
         &self.visibility
