@@ -158,14 +158,14 @@ fn run_info(job: InfoJob, w: &mut dyn Write) -> Result<()> {
         None => Mesh::new(Arc::clone(&job.surface), level),
     };
     let mut measured_level = job.level;
-    let mesh = if elements <= INFO_MAX_BUILT_ELEMENTS {
+    let mesh = Arc::new(if elements <= INFO_MAX_BUILT_ELEMENTS {
         build(job.level)
     } else {
         while measured_level > 0 && base * 4u64.pow(measured_level) > INFO_MAX_BUILT_ELEMENTS {
             measured_level -= 1;
         }
         Mesh::new(Arc::clone(&job.surface), measured_level)
-    };
+    });
     let shrink = 2f64.powi((job.level - measured_level) as i32);
     let sizes: Vec<f64> = (0..mesh.len())
         .map(|k| {
@@ -180,18 +180,7 @@ fn run_info(job: InfoJob, w: &mut dyn Write) -> Result<()> {
     let matrix_bytes = 8.0 * n * n;
     let fits = |solver| usize::try_from(unknowns).is_ok_and(|u| check_memory(u, solver).is_ok());
     let vis = visibility::analyze(&job.surface);
-    let bbox = radcol_core::visibility::base_triangles(&job.surface)
-        .iter()
-        .flatten()
-        .fold(
-            ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
-            |(lo, hi), v| {
-                (
-                    [lo[0].min(v.x), lo[1].min(v.y), lo[2].min(v.z)],
-                    [hi[0].max(v.x), hi[1].max(v.y), hi[2].max(v.z)],
-                )
-            },
-        );
+    let bbox = job.surface.bounding_box();
     let contents = job.loaded.scene().map(|sc| {
         let areas = sc.patch_areas();
         let materials = sc
@@ -227,7 +216,10 @@ fn run_info(job: InfoJob, w: &mut dyn Write) -> Result<()> {
             warnings: sc.warnings.clone(),
         }
     });
-    let estimate = estimate_assembly(&job, elements);
+    // Planned on the mesh just built, which is the job's when it is small enough.
+    let estimate = (elements <= INFO_MAX_PLANNED_ELEMENTS && measured_level == job.level)
+        .then(|| estimate_assembly(&job, &mesh))
+        .flatten();
     let rep = InfoReport {
         scene: job.scene.clone(),
         level: job.level,
@@ -245,8 +237,8 @@ fn run_info(job: InfoJob, w: &mut dyn Write) -> Result<()> {
         shape_ratio: ShapeRatio { min: lo, max: hi },
         area: mesh.area(),
         bounding_box: BoundingBox {
-            min: bbox.0,
-            max: bbox.1,
+            min: bbox.0.to_array(),
+            max: bbox.1.to_array(),
         },
         measured_level,
         unknowns,
@@ -274,19 +266,11 @@ const INFO_SAMPLE_BLOCKS: usize = 24;
 /// Largest mesh whose assembly `radcol info` plans (the plan holds n² classes).
 const INFO_MAX_PLANNED_ELEMENTS: u64 = 6000;
 
-/// Plans the assembly at the job's level and times a few row blocks spread
-/// over the mesh on this machine's CPU, extrapolating to all blocks on all
-/// threads; None when the mesh is too large to plan here.
-fn estimate_assembly(job: &InfoJob, elements: u64) -> Option<Estimate> {
-    if elements > INFO_MAX_PLANNED_ELEMENTS {
-        return None;
-    }
-    let mesh = Arc::new(match job.max_edge {
-        Some(h) => Mesh::with_max_edge(Arc::clone(&job.surface), job.level, h),
-        None => Mesh::new(Arc::clone(&job.surface), job.level),
-    });
+/// Plans the assembly on `mesh` (the job's) and times a few row blocks spread
+/// over it on this machine's CPU, extrapolating to all blocks on all threads.
+fn estimate_assembly(job: &InfoJob, mesh: &Arc<Mesh>) -> Option<Estimate> {
     let nodes = NodeSet::new(job.degree, auto_alpha(job.degree)).ok()?;
-    let disc = Arc::new(Discretization::new(mesh, nodes));
+    let disc = Arc::new(Discretization::new(Arc::clone(mesh), nodes));
     let t = Instant::now();
     let plan = AssemblyPlan::new(disc.clone(), QuadratureOptions::default());
     let plan_s = t.elapsed().as_secs_f64();

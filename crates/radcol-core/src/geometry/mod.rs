@@ -93,4 +93,22 @@ impl Surface {
     pub fn base_triangle_count(&self) -> usize {
         self.patches.iter().map(|p| p.triangles.len()).sum()
     }
+
+    /// The axis-aligned box (min, max) of the mapped vertices of the base
+    /// triangles (exact for flat surfaces; curved patches may bulge beyond it).
+    pub fn bounding_box(&self) -> (DVec3, DVec3) {
+        bounds(
+            self.patches
+                .iter()
+                .flat_map(|p| p.triangles.iter().flat_map(|t| t.map(|x| p.map.map(x)))),
+        )
+    }
+}
+
+/// The axis-aligned box (min, max) of `points` (min = +∞, max = -∞ when empty).
+pub fn bounds(points: impl IntoIterator<Item = DVec3>) -> (DVec3, DVec3) {
+    points.into_iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(p), hi.max(p)),
+    )
 }

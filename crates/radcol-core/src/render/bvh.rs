@@ -99,13 +99,7 @@ impl ElementBvh {
                 }
             }
         }
-        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        for f in &facets {
-            for v in f.v {
-                lo = lo.min(v);
-                hi = hi.max(v);
-            }
-        }
+        let (mut lo, mut hi) = crate::geometry::bounds(facets.iter().flat_map(|f| f.v));
         if facets.is_empty() {
             lo = DVec3::ZERO;
             hi = DVec3::ZERO;

@@ -289,10 +289,7 @@ impl Scene {
 
     /// Axis-aligned bounding box (min, max).
     pub fn bounding_box(&self) -> (DVec3, DVec3) {
-        self.triangles().flat_map(|(_, t)| t).fold(
-            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), v| (lo.min(v), hi.max(v)),
-        )
+        self.surface.bounding_box()
     }
 
     /// Number of triangles.

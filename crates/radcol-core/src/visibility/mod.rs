@@ -85,11 +85,7 @@ pub fn is_convex_enclosure(tris: &[[DVec3; 3]]) -> bool {
 /// A triangle index and a vertex strictly behind its plane, if any (relative
 /// tolerance 1e-9 of the scene's size, so that units do not matter).
 fn concave_witness(tris: &[[DVec3; 3]]) -> Option<(usize, DVec3)> {
-    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-    for v in tris.iter().flatten() {
-        lo = lo.min(*v);
-        hi = hi.max(*v);
-    }
+    let (lo, hi) = crate::geometry::bounds(tris.iter().flatten().copied());
     let scale = (hi - lo).length();
     let mut verts: Vec<DVec3> = tris.iter().flatten().copied().collect();
     verts.sort_by(|a, b| {

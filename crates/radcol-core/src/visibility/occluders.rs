@@ -11,6 +11,7 @@
 //! pair is integrated with the visible part clipped exactly
 //! ([`super::clip`]).
 
+use crate::geometry::bounds;
 use glam::{DVec3, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::builder::build_bvh2;
@@ -60,11 +61,7 @@ const REL_TOL: f64 = 1e-9;
 impl Occluders {
     /// The occluders of `tris` (degenerate triangles are left out: they hide nothing).
     pub fn new(tris: &[[DVec3; 3]]) -> Self {
-        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        for v in tris.iter().flatten() {
-            lo = lo.min(*v);
-            hi = hi.max(*v);
-        }
+        let (lo, hi) = bounds(tris.iter().flatten().copied());
         let scale = if tris.is_empty() {
             1.0
         } else {
@@ -84,7 +81,7 @@ impl Occluders {
         let boxes: Vec<PaddedBox> = tris
             .iter()
             .map(|t| {
-                let (a, b) = bounds(&t.v);
+                let (a, b) = bounds(t.v);
                 PaddedBox(Aabb::new(to_f32(a - pad), to_f32(b + pad)))
             })
             .collect();
@@ -200,7 +197,7 @@ impl Occluders {
         if self.tris.is_empty() {
             return;
         }
-        let (lo, hi) = bounds(pts);
+        let (lo, hi) = bounds(pts.iter().copied());
         let pad = 1e-5 * self.scale;
         let query = Aabb::new(to_f32(lo - pad), to_f32(hi + pad));
         let mut hull: Option<HullAxes> = None;
@@ -269,13 +266,6 @@ pub(crate) fn crosses(p: DVec3, q: DVec3, t: &Occluder, tol: f64) -> bool {
         // Signed distance of x from the edge line, inside positive.
         e.cross(x - u).dot(t.normal) > tol * e.length()
     })
-}
-
-fn bounds(pts: &[DVec3]) -> (DVec3, DVec3) {
-    pts.iter().fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-    )
 }
 
 fn to_f32(v: DVec3) -> Vec3A {
