@@ -173,10 +173,10 @@ impl AssemblyPlan {
         let occluders = visibility
             .needed
             .then(|| Occluders::new(&visibility::base_triangles(mesh.surface())));
-        let clusters = if occluders.is_some() {
-            clusters(&mesh)
+        let tree = if occluders.is_some() {
+            RefinementTree::new(&mesh)
         } else {
-            Vec::new()
+            RefinementTree::default()
         };
         let rows: Vec<(Vec<u8>, PartialRow)> = (0..n)
             .into_par_iter()
@@ -220,12 +220,12 @@ impl AssemblyPlan {
                     let walk = Walk {
                         occ,
                         a: flat_geom[kp],
-                        mesh: &mesh,
+                        tree: &tree,
                         balls,
                         flat_geom,
                     };
-                    for c in &clusters {
-                        walk.visit(c.root, c.start..c.end, None, &mut row, &mut partial);
+                    for &root in &tree.roots {
+                        walk.visit(root, None, &mut row, &mut partial);
                     }
                 }
                 if let Some(p) = &progress {
@@ -506,55 +506,99 @@ fn straddles((va, na): ([glam::DVec3; 3], glam::DVec3), vb: [glam::DVec3; 3], sc
     side.iter().any(|&d| d > tol) && side.iter().any(|&d| d < -tol)
 }
 
-/// Consecutive elements inside one base triangle (refinement numbers
-/// descendants consecutively).
-struct Cluster {
+/// One node of a base triangle's refinement tree: the consecutive elements
+/// inside triangle `vertices` (refinement numbers descendants consecutively).
+struct TreeNode {
     start: usize,
     end: usize,
-    root: crate::mesh::Element,
+    /// Mapped vertices and unit normal of the node's (flat) triangle.
+    vertices: [glam::DVec3; 3],
+    normal: glam::DVec3,
+    /// Child nodes (indices into `RefinementTree::nodes`).
+    children: Vec<u32>,
+    /// First element of the range not under a child (`end` when the
+    /// elements follow the refinement, as radcol's meshes do).
+    rest: usize,
 }
 
-/// The elements of `mesh` grouped by base triangle, for scenes that occlude
-/// (flat patches). Falls back to one cluster per element when the order is
-/// not the refinement's.
-fn clusters(mesh: &crate::mesh::Mesh) -> Vec<Cluster> {
-    let roots: Vec<crate::mesh::Element> = mesh
-        .surface()
-        .patches
-        .iter()
-        .enumerate()
-        .flat_map(|(j, p)| {
-            p.triangles.iter().map(move |&param| crate::mesh::Element {
-                patch: j as u32,
-                param,
-            })
-        })
-        .collect();
-    let mut out = Vec::new();
-    let mut k = 0;
-    for root in roots {
-        let start = k;
-        while k < mesh.len() && inside(mesh, &root, k) {
-            k += 1;
+/// The refinement trees of the base triangles over the elements of a mesh,
+/// built once per plan for scenes that occlude (flat patches).
+#[derive(Default)]
+struct RefinementTree {
+    nodes: Vec<TreeNode>,
+    roots: Vec<u32>,
+}
+
+impl RefinementTree {
+    /// Falls back to one root per element when the elements are not grouped
+    /// by base triangle.
+    fn new(mesh: &crate::mesh::Mesh) -> Self {
+        let mut tree = Self::default();
+        let mut k = 0;
+        for (j, p) in mesh.surface().patches.iter().enumerate() {
+            for &param in &p.triangles {
+                let root = crate::mesh::Element {
+                    patch: j as u32,
+                    param,
+                };
+                let start = k;
+                while k < mesh.len() && inside(mesh, &root, k) {
+                    k += 1;
+                }
+                if k > start {
+                    let id = tree.build(mesh, root, start..k);
+                    tree.roots.push(id);
+                }
+            }
         }
-        if k > start {
-            out.push(Cluster {
-                start,
-                end: k,
-                root,
-            });
+        if k == mesh.len() {
+            return tree;
         }
+        let mut tree = Self::default();
+        for k in 0..mesh.len() {
+            let id = tree.build(mesh, mesh.elements()[k], k..k + 1);
+            tree.roots.push(id);
+        }
+        tree
     }
-    if k == mesh.len() {
-        return out;
+
+    fn build(
+        &mut self,
+        mesh: &crate::mesh::Mesh,
+        node: crate::mesh::Element,
+        range: std::ops::Range<usize>,
+    ) -> u32 {
+        let map = &mesh.surface().patches[node.patch as usize].map;
+        let vertices = node.param.map(|x| map.map(x));
+        let normal = (vertices[1] - vertices[0])
+            .cross(vertices[2] - vertices[0])
+            .normalize_or_zero();
+        let id = self.nodes.len();
+        self.nodes.push(TreeNode {
+            start: range.start,
+            end: range.end,
+            vertices,
+            normal,
+            children: Vec::new(),
+            rest: range.end,
+        });
+        if range.len() > 1 {
+            let mut k = range.start;
+            let mut children = Vec::with_capacity(4);
+            for child in node.children() {
+                let start = k;
+                while k < range.end && inside(mesh, &child, k) {
+                    k += 1;
+                }
+                if k > start {
+                    children.push(self.build(mesh, child, start..k));
+                }
+            }
+            self.nodes[id].children = children;
+            self.nodes[id].rest = k;
+        }
+        id as u32
     }
-    (0..mesh.len())
-        .map(|k| Cluster {
-            start: k,
-            end: k + 1,
-            root: mesh.elements()[k],
-        })
-        .collect()
 }
 
 /// True when element `k`'s parameter centroid lies in `node`'s triangle.
@@ -573,7 +617,7 @@ fn inside(mesh: &crate::mesh::Mesh, node: &crate::mesh::Element, k: usize) -> bo
 struct Walk<'a> {
     occ: &'a Occluders,
     a: ([glam::DVec3; 3], glam::DVec3),
-    mesh: &'a crate::mesh::Mesh,
+    tree: &'a RefinementTree,
     balls: &'a [(glam::DVec3, f64, bool)],
     flat_geom: &'a [([glam::DVec3; 3], glam::DVec3)],
 }
@@ -607,51 +651,35 @@ impl Walk<'_> {
         }
     }
 
-    fn visit(
-        &self,
-        node: crate::mesh::Element,
-        range: std::ops::Range<usize>,
-        among: Option<&[u32]>,
-        row: &mut [u8],
-        partial: &mut PartialRow,
-    ) {
-        if !range.clone().any(|k| self.live(row, k)) {
+    fn visit(&self, id: u32, among: Option<&[u32]>, row: &mut [u8], partial: &mut PartialRow) {
+        let node = &self.tree.nodes[id as usize];
+        if !(node.start..node.end).any(|k| self.live(row, k)) {
             return;
         }
         let mut cands = Vec::new();
-        if range.len() == 1 {
+        if node.end - node.start == 1 {
             // The node is the element itself.
-            let k = range.start;
+            let k = node.start;
             self.candidates(self.flat_geom[k], among, &mut cands);
             self.mark(k, &cands, row, partial);
             return;
         }
-        let map = &self.mesh.surface().patches[node.patch as usize].map;
-        let v = node.param.map(|x| map.map(x));
-        let normal = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
-        self.candidates((v, normal), among, &mut cands);
+        self.candidates((node.vertices, node.normal), among, &mut cands);
         if cands.is_empty() {
-            for k in range {
+            for k in node.start..node.end {
                 if self.live(row, k) {
                     self.mark(k, &[], row, partial);
                 }
             }
             return;
         }
-        let mut k = range.start;
-        for child in node.children() {
-            let start = k;
-            while k < range.end && inside(self.mesh, &child, k) {
-                k += 1;
-            }
-            if k > start {
-                self.visit(child, start..k, Some(&cands), row, partial);
-            }
+        for &child in &node.children {
+            self.visit(child, Some(&cands), row, partial);
         }
         // Elements not in refinement order (not produced by radcol's meshes):
         // tested one by one against this node's candidates.
         let mut one = Vec::new();
-        for k in k..range.end {
+        for k in node.rest..node.end {
             if self.live(row, k) {
                 one.clear();
                 self.candidates(self.flat_geom[k], Some(&cands), &mut one);
