@@ -19,7 +19,8 @@ use std::sync::Arc;
 fn plan(surface: Surface, r: usize, level: u32) -> AssemblyPlan {
     let mesh = Arc::new(Mesh::new(Arc::new(surface), level));
     let disc = Arc::new(Discretization::new(mesh, NodeSet::new(r, 0.1).unwrap()));
-    AssemblyPlan::new(disc, QuadratureOptions::default())
+    let visibility = radcol_core::visibility::analyze(disc.mesh().surface());
+    AssemblyPlan::new(disc, QuadratureOptions::default(), &visibility)
 }
 
 /// Far-field kernel throughput on the box room (flat walls, 1/r² near edges),

@@ -14,6 +14,7 @@ use radcol_core::nodes::NodeSet;
 use radcol_core::render::{render, RenderOptions};
 use radcol_core::run::{solve, SolveConfig};
 use radcol_core::scene::builtin;
+use radcol_core::visibility::analyze;
 use std::sync::Arc;
 
 fn disc(name: &str, max_edge: f64) -> Arc<Discretization> {
@@ -35,9 +36,14 @@ fn occlusion(c: &mut Criterion) {
         let d = disc(name, max_edge);
         let elements = d.mesh().len();
         group.bench_function(BenchmarkId::new(format!("{name}_plan"), elements), |b| {
-            b.iter(|| AssemblyPlan::new(d.clone(), QuadratureOptions::default()))
+            // The visibility analysis is part of planning, as in every solve.
+            b.iter(|| {
+                let visibility = analyze(d.mesh().surface());
+                AssemblyPlan::new(d.clone(), QuadratureOptions::default(), &visibility)
+            })
         });
-        let plan = AssemblyPlan::new(d.clone(), QuadratureOptions::default());
+        let visibility = analyze(d.mesh().surface());
+        let plan = AssemblyPlan::new(d.clone(), QuadratureOptions::default(), &visibility);
         println!("{name}: {elements} elements, {:?}", plan.stats());
         group.bench_function(BenchmarkId::new(format!("{name}_fill"), elements), |b| {
             b.iter(|| CpuBackend.assemble(&plan).unwrap())
@@ -50,6 +56,7 @@ fn occlusion(c: &mut Criterion) {
                     visibility: VisibilityMode::Rays,
                     ..Default::default()
                 },
+                &visibility,
             );
             group.bench_function(
                 BenchmarkId::new(format!("{name}_fill_rays"), elements),

@@ -16,7 +16,8 @@ fn solvers(c: &mut Criterion) {
     for (r, level) in [(1, 2), (2, 2), (1, 3), (2, 3)] {
         let mesh = Arc::new(Mesh::new(Arc::new(box_room(1.0, 1.0, 1.0)), level));
         let disc = Arc::new(Discretization::new(mesh, NodeSet::new(r, 0.1).unwrap()));
-        let plan = AssemblyPlan::new(disc, QuadratureOptions::default());
+        let visibility = radcol_core::visibility::analyze(disc.mesh().surface());
+        let plan = AssemblyPlan::new(disc, QuadratureOptions::default(), &visibility);
         let gm = CpuBackend.assemble(&plan).unwrap().matrix;
         let n = gm.nrows();
         let rho = vec![0.7; n];

@@ -8,16 +8,8 @@ use radcol_core::run::SolveConfig;
 use radcol_core::study::{fitted_order, study, StudyRow};
 use std::sync::Arc;
 
-/// Asserts |got - want| ≤ tol, printing the label, index, both values, the
-/// difference and the tolerance when it fails.
-#[track_caller]
-pub fn assert_close(label: &str, index: usize, got: f64, want: f64, tol: f64) {
-    let diff = (got - want).abs();
-    assert!(
-        diff <= tol,
-        "{label}[{index}]: got {got:.17e}, want {want:.17e}, |diff| = {diff:.3e} > tol {tol:.3e}"
-    );
-}
+/// The one tolerance check (core's), re-exported for these tests.
+pub use radcol_core::testing::assert_close;
 
 /// Fitted orders (nodes, global, L2) of a study over `levels`, printing the table.
 pub fn orders(

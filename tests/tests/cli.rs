@@ -156,7 +156,7 @@ fn solve_json_has_every_contract_key() {
     assert_eq!(v["level"], 1);
     assert_eq!(v["elements"], 32);
     assert_eq!(v["unknowns"], 96);
-    assert!((num(&v, "alpha") - 1.0 / 6.0).abs() < 1e-15);
+    radcol_core::assert_close!(num(&v, "alpha"), 1.0 / 6.0, 1e-15);
     for key in ["kind", "device", "precision"] {
         assert!(v["backend"][key].is_string(), "backend.{key} in {v}");
     }
@@ -184,7 +184,7 @@ fn solve_json_has_every_contract_key() {
     assert!(ch["integral_u"].is_f64() && ch["integral_e"].is_f64());
     assert!(ch["errors"].is_null(), "no exact solution: errors null");
     // Unit sphere, ρ = 1/2, E = 1: u = 2 and ∫u = 8π (G ≡ 1/4).
-    assert!((num(ch, "integral_u") - 8.0 * std::f64::consts::PI).abs() < 0.1);
+    radcol_core::assert_close!(num(ch, "integral_u"), 8.0 * std::f64::consts::PI, 0.1);
 }
 
 #[test]
@@ -391,7 +391,7 @@ fn study_requires_exact_and_valid_levels() {
 fn nodes_degree_one_gives_alpha0_one_sixth() {
     let v = stdout_json(&radcol(&["nodes", "--degree", "1", "--json"]));
     let a0 = num(&v, "alpha0");
-    assert!((a0 - 1.0 / 6.0).abs() < 1e-15, "alpha0 = {a0}");
+    radcol_core::assert_close!(a0, 1.0 / 6.0, 1e-15, "alpha0 = {a0}");
     assert_eq!(v["degree"], 1);
     assert_eq!(v["precision"], 2);
     assert!(v["alpha0_reason"].as_str().is_some_and(|s| !s.is_empty()));
@@ -428,7 +428,7 @@ fn info_reports_mesh_and_memory() {
     assert_eq!(v["base_triangles"], 12);
     assert_eq!(v["patches"], 6);
     assert_eq!(v["unknowns"], 48 * 6);
-    assert!((num(&v, "area") - 22.0).abs() < 1e-12);
+    radcol_core::assert_close!(num(&v, "area"), 22.0, 1e-12);
     assert_eq!(v["visibility"]["needed"], false);
     assert_eq!(v["bounding_box"]["max"], serde_json::json!([1.0, 2.0, 3.0]));
     assert!(
@@ -686,11 +686,11 @@ fn vertex_files_carry_the_solution() {
     assert_eq!(vertices.len(), 32 * 10);
     for (x, n, u) in &vertices {
         let r = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
-        assert!((r - 1.0).abs() < 1e-6, "vertex off the sphere: {x:?}");
+        radcol_core::assert_close!(r, 1.0, 1e-6, "vertex off the sphere: {x:?}");
         let dot = (n[0] * x[0] + n[1] * x[1] + n[2] * x[2]) / r;
-        assert!((dot + 1.0).abs() < 1e-5, "normal {n:?} at {x:?}");
+        radcol_core::assert_close!(dot, -1.0, 1e-5, "normal {n:?} at {x:?}");
         assert_eq!(u.len(), 1);
-        assert!((u[0] - 2.0).abs() < 1e-5, "u = {}", u[0]);
+        radcol_core::assert_close!(u[0], 2.0, 1e-5, "u = {}", u[0]);
     }
     let (doc, buffers, _) = gltf::import(&glb).unwrap();
     let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
@@ -784,7 +784,7 @@ fn scenes_get_a_default_refinement() {
     let v = stdout_json(&radcol(&["solve", "plates", "--backend", "cpu", "--json"]));
     let diagonal = 3f64.sqrt();
     assert_eq!(v["level"], 0);
-    assert!((num(&v, "max_edge") - 0.1 * diagonal).abs() < 1e-15);
+    radcol_core::assert_close!(num(&v, "max_edge"), 0.1 * diagonal, 1e-15);
     // Each unit square's two triangles have hypotenuse √2: split 4 times
     // (edges √2/16 < 0.173 < √2/8), 256 elements per triangle.
     assert_eq!(v["elements"], 4 * 256);

@@ -23,6 +23,7 @@
 
 use radcol_core::assembly::conformance::{check_backend, compare_matrices, MatrixDiff};
 use radcol_core::assembly::{AssemblyBackend, AssemblyPlan, FillMode, QuadratureOptions};
+use radcol_core::assembly::{BackendKind, Scalar};
 use radcol_core::discretization::Discretization;
 use radcol_core::geometry::shapes::{box_room, sphere};
 use radcol_core::geometry::Surface;
@@ -42,7 +43,8 @@ const F32_TOL: f64 = 1e-5;
 fn plan(surface: Surface, r: usize, level: u32) -> AssemblyPlan {
     let mesh = Arc::new(Mesh::new(Arc::new(surface), level));
     let disc = Arc::new(Discretization::new(mesh, NodeSet::new(r, 0.1).unwrap()));
-    AssemblyPlan::new(disc, QuadratureOptions::default())
+    let visibility = radcol_core::visibility::analyze(disc.mesh().surface());
+    AssemblyPlan::new(disc, QuadratureOptions::default(), &visibility)
 }
 
 #[test]
@@ -59,10 +61,7 @@ fn gpu_f64_matrices_equal_the_cpu_ones() {
     }
     let gpu = GpuBackend::new(ctx, Precision::F64).unwrap();
     let info = gpu.info();
-    assert_eq!(
-        (info.kind.as_str(), info.precision.as_str()),
-        ("gpu", "f64")
-    );
+    assert_eq!((info.kind, info.precision), (BackendKind::Gpu, Scalar::F64));
     println!("device: {}", info.device);
     let diffs = check_backend(&gpu, F64_TOL, F64_ROW_FLOOR).unwrap_or_else(|e| panic!("{e}"));
     let mut worst = MatrixDiff::default();
@@ -86,7 +85,7 @@ fn gpu_f32_matrices_are_within_the_documented_bound() {
         return;
     };
     let gpu = GpuBackend::new(ctx, Precision::F32).unwrap();
-    assert_eq!(gpu.info().precision, "f32");
+    assert_eq!(gpu.info().precision, Scalar::F32);
     let diffs = check_backend(&gpu, F32_TOL, 1.0).unwrap_or_else(|e| panic!("{e}"));
     let mut worst = 0.0f64;
     for (name, d) in &diffs {
@@ -153,7 +152,7 @@ fn gpu_tiling_does_not_change_the_matrix() {
             p.fill_block(kp, block, FillMode::FarOnly);
         }
         let got = DenseMatrix::from_row_major(p.dim(), p.dim(), far);
-        let (tol, floor) = if tiled.precision() == Precision::F64 {
+        let (tol, floor) = if tiled.precision() == Scalar::F64 {
             (F64_TOL, F64_ROW_FLOOR)
         } else {
             (F32_TOL, 1.0)
@@ -176,7 +175,7 @@ fn gpu_rows_of_the_sphere_sum_to_one() {
     let gpu = GpuBackend::new(ctx, Precision::Auto).unwrap();
     let p = plan(sphere(1.0), 1, 2);
     let out = gpu.assemble(&p).unwrap();
-    let tol = if gpu.precision() == Precision::F64 {
+    let tol = if gpu.precision() == Scalar::F64 {
         1e-9
     } else {
         1e-5

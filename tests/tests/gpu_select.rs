@@ -1,30 +1,38 @@
-//! Backend selection by name: `cpu` never touches wgpu, `gpu` without an
-//! adapter is a clear error, `auto` picks a hardware GPU or the CPU.
+//! Backend selection: `cpu` never touches wgpu, `gpu` without an adapter is
+//! a clear error, `auto` picks a hardware GPU or the CPU.
 
+use radcol_core::assembly::{BackendKind, Scalar};
 use radcol_gpu::testing::gpu_required;
-use radcol_gpu::{backend_from_name, AdapterFilter, GpuContext, Precision};
+use radcol_gpu::{select_backend, AdapterFilter, BackendChoice, GpuContext, Precision};
+
+fn named(
+    name: &str,
+    precision: Precision,
+) -> Result<Box<dyn radcol_core::assembly::AssemblyBackend>, String> {
+    let choice: BackendChoice = name
+        .parse()
+        .map_err(|e: radcol_gpu::GpuError| e.to_string())?;
+    select_backend(choice, precision).map_err(|e| e.to_string())
+}
 
 #[test]
 fn cpu_is_the_rayon_backend_in_f64() {
-    let b = backend_from_name("cpu", None).unwrap();
+    let b = named("cpu", Precision::Auto).unwrap();
     let info = b.info();
-    assert_eq!(
-        (info.kind.as_str(), info.precision.as_str()),
-        ("cpu", "f64")
-    );
-    assert!(backend_from_name("CPU", Some(Precision::F64)).is_ok());
-    let e = backend_from_name("cpu", Some(Precision::F32))
+    assert_eq!((info.kind, info.precision), (BackendKind::Cpu, Scalar::F64));
+    assert!(named("CPU", Precision::F64).is_ok());
+    let e = named("cpu", Precision::F32)
         .err()
         .expect("f32 on the CPU is refused");
-    assert!(e.to_string().contains("f64 only"), "{e}");
+    assert!(e.contains("f64 only"), "{e}");
 }
 
 #[test]
 fn unknown_names_are_refused() {
-    let e = backend_from_name("tpu", None)
+    let e = named("tpu", Precision::Auto)
         .err()
         .expect("unknown backend");
-    assert!(e.to_string().contains("expected cpu, gpu or auto"), "{e}");
+    assert!(e.contains("expected cpu, gpu or auto"), "{e}");
     let e = "f16".parse::<Precision>().unwrap_err();
     assert!(e.to_string().contains("expected auto, f64 or f32"), "{e}");
     assert_eq!("F32".parse::<Precision>().unwrap(), Precision::F32);
@@ -32,20 +40,20 @@ fn unknown_names_are_refused() {
 
 #[test]
 fn gpu_is_an_adapter_or_a_clear_error() {
-    match backend_from_name("gpu", None) {
+    match named("gpu", Precision::Auto) {
         Ok(b) => {
             let info = b.info();
             println!("gpu: {} ({})", info.device, info.precision);
-            assert_eq!(info.kind, "gpu");
-            assert!(info.precision == "f64" || info.precision == "f32");
+            assert_eq!(info.kind, BackendKind::Gpu);
             assert!(!info.device.is_empty());
         }
-        Err(e) => {
-            let msg = e.to_string();
+        Err(msg) => {
             println!("gpu: {msg}");
             assert!(!gpu_required(), "RADCOL_REQUIRE_GPU is set but: {msg}");
+            // The library names the fallback; the CLI adds its flag
+            // (tests/tests/cli.rs).
             assert!(
-                msg.contains("no GPU adapter") && msg.contains("--backend cpu"),
+                msg.contains("no GPU adapter") && msg.contains("CPU backend"),
                 "{msg}"
             );
         }
@@ -54,12 +62,14 @@ fn gpu_is_an_adapter_or_a_clear_error() {
 
 #[test]
 fn auto_uses_a_hardware_gpu_or_the_cpu() {
-    let b = backend_from_name("auto", None).unwrap();
+    let b = named("auto", Precision::Auto).unwrap();
     let info = b.info();
-    println!(
-        "auto: {} on {} ({})",
-        info.kind, info.device, info.precision
-    );
+    println!("auto: {info}");
     let hardware = GpuContext::new(AdapterFilter::Hardware).is_ok();
-    assert_eq!(info.kind, if hardware { "gpu" } else { "cpu" });
+    let want = if hardware {
+        BackendKind::Gpu
+    } else {
+        BackendKind::Cpu
+    };
+    assert_eq!(info.kind, want);
 }

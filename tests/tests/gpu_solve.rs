@@ -37,7 +37,7 @@ fn gpu_solutions_match_the_cpu() {
         let want = cpu.channels[0].solution.nodal();
         for (gpu, tol) in &backends {
             let out = solve(&problem, &cfg, gpu).unwrap();
-            assert_eq!(out.backend.kind, "gpu");
+            assert_eq!(out.backend.kind, radcol_core::assembly::BackendKind::Gpu);
             assert_eq!(out.kernel_evals, cpu.kernel_evals);
             let got = out.channels[0].solution.nodal();
             let d = rel_diff(got, want);
@@ -75,7 +75,7 @@ fn gpu_study_orders_match_the_cpu() {
     let levels = 1..=3;
     let cpu = study(&problem, &cfg, levels.clone(), &CpuBackend, |_| {}).unwrap();
     let dev = study(&problem, &cfg, levels, &gpu, |_| {}).unwrap();
-    let f64_run = gpu.precision() == Precision::F64;
+    let f64_run = gpu.precision() == radcol_core::assembly::Scalar::F64;
     for (i, (g, c)) in dev.iter().zip(&cpu).enumerate() {
         println!(
             "level {}: nodes {:.6e} vs {:.6e}, global {:.6e} vs {:.6e} ({})",

@@ -40,6 +40,17 @@ pub fn exit_code(err: &anyhow::Error) -> u8 {
     }
 }
 
+/// A core error with the command-line flags that change it named: the
+/// library's messages speak of meshes and degrees, the CLI's of flags.
+pub fn with_flags(err: CoreError) -> anyhow::Error {
+    match &err {
+        CoreError::Input(e @ InputError::TooLarge { .. }) => {
+            bad_input(format!("{e} (flags: --level, --max-edge, --degree)")).into()
+        }
+        _ => anyhow::Error::new(err),
+    }
+}
+
 /// True when `err` is a closed stdout (`radcol nodes | head`): not worth a message.
 pub fn is_broken_pipe(err: &anyhow::Error) -> bool {
     err.chain().any(|cause| {

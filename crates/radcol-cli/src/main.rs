@@ -1,7 +1,9 @@
 //! The `radcol` command: solve, study, nodes, info.
 //!
-//! Two layers (ripgrep's shape): clap arguments ([`args`]) are validated into a
-//! [`config::Config`] of core types, which [`run::run`] executes. `main` is the
+//! Three layers (ripgrep's shape): clap arguments ([`args`]) are parsed into
+//! validated values ([`validate::Config`]: no I/O, no device, no numerics),
+//! which [`run::run`] executes, building the scene, backend and problem on
+//! demand ([`setup`]) and reporting through [`report`]. `main` is the
 //! one place that turns failures into an exit code (2 for bad input, 1 for
 //! anything else) and one `error: ...` line on stderr.
 //!
@@ -15,7 +17,6 @@
 //! ```
 
 mod args;
-mod config;
 mod error;
 mod export;
 mod output;
@@ -24,6 +25,8 @@ mod progress;
 mod report;
 mod run;
 mod scene;
+mod setup;
+mod validate;
 
 use clap::error::ErrorKind;
 use clap::Parser;
@@ -98,5 +101,5 @@ fn try_main() -> anyhow::Result<()> {
             _ => return Err(error::bad_input(error::clap_one_line(&e)).into()),
         },
     };
-    run::run(config::Config::from_cli(cli)?)
+    run::run(validate::Config::from_cli(cli)?)
 }

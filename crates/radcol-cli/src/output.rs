@@ -1,11 +1,12 @@
 //! Files the CLI writes: the nodal CSV, images and vertex meshes, and the
 //! overwrite rule shared by every file.
 
-use crate::config::{Look, Output, OutputFile, OutputKind};
 use crate::error::bad_input;
 use crate::export;
 use crate::progress::Bar;
 use crate::report::Written;
+use crate::setup::Look;
+use crate::validate::{Output, OutputFile, OutputKind};
 use anyhow::{Context, Result};
 use radcol_core::render::{self, Image, VertexMesh};
 use radcol_core::run::SolveOutcome;
@@ -93,7 +94,7 @@ pub fn write_all(
 }
 
 /// Opens `file` for writing: a fresh file, or (with `--force`) a truncated one.
-/// `create_new` closes the gap between the check in `config` and this write.
+/// `create_new` closes the gap between the check in `setup::check_writable` and this write.
 pub fn create(file: &OutputFile) -> Result<BufWriter<File>> {
     let mut opts = OpenOptions::new();
     opts.write(true);

@@ -120,6 +120,79 @@ fn marker(svg: &mut String, m: Marker, x: f64, y: f64, color: &str) {
     };
 }
 
+/// Decade grid lines, ticks and labels of `axis` (the x axis when
+/// `horizontal`) on the panel at `left`; minor ticks at 2..9 × 10^k.
+fn ticks(svg: &mut String, axis: LogAxis, horizontal: bool, left: f64) {
+    let top = PANEL_TOP;
+    let bottom = top + PANEL_H;
+    let step = axis.label_step();
+    for k in axis.lo..=axis.hi {
+        let f = (k - axis.lo) as f64 / (axis.hi - axis.lo) as f64;
+        let labelled = (k - axis.lo) % step == 0;
+        if horizontal {
+            let xp = left + f * PANEL_W;
+            let _ = writeln!(
+                svg,
+                r##"<line x1="{xp:.2}" y1="{top}" x2="{xp:.2}" y2="{bottom}" stroke="#e4e4e4"/>"##
+            );
+            let _ = writeln!(
+                svg,
+                r##"<line x1="{xp:.2}" y1="{bottom}" x2="{xp:.2}" y2="{:.2}" stroke="#333333"/>"##,
+                bottom + 6.0
+            );
+            if labelled {
+                let _ = writeln!(
+                    svg,
+                    r#"<text x="{xp:.2}" y="{:.2}" text-anchor="middle">{}</text>"#,
+                    bottom + 22.0,
+                    decade_label(k)
+                );
+            }
+        } else {
+            let yp = bottom - f * PANEL_H;
+            let _ = writeln!(
+                svg,
+                r##"<line x1="{left}" y1="{yp:.2}" x2="{:.2}" y2="{yp:.2}" stroke="#e4e4e4"/>"##,
+                left + PANEL_W
+            );
+            let _ = writeln!(
+                svg,
+                r##"<line x1="{:.2}" y1="{yp:.2}" x2="{left}" y2="{yp:.2}" stroke="#333333"/>"##,
+                left - 6.0
+            );
+            if labelled {
+                let _ = writeln!(
+                    svg,
+                    r#"<text x="{:.2}" y="{:.2}" text-anchor="end">{}</text>"#,
+                    left - 9.0,
+                    yp + 4.0,
+                    decade_label(k)
+                );
+            }
+        }
+        if k < axis.hi {
+            for m in 2..=9 {
+                let g = f + (m as f64).log10() / (axis.hi - axis.lo) as f64;
+                if horizontal {
+                    let xp = left + g * PANEL_W;
+                    let _ = writeln!(
+                        svg,
+                        r##"<line x1="{xp:.2}" y1="{bottom}" x2="{xp:.2}" y2="{:.2}" stroke="#333333"/>"##,
+                        bottom + 3.0
+                    );
+                } else {
+                    let yp = bottom - g * PANEL_H;
+                    let _ = writeln!(
+                        svg,
+                        r##"<line x1="{:.2}" y1="{yp:.2}" x2="{left}" y2="{yp:.2}" stroke="#333333"/>"##,
+                        left - 3.0
+                    );
+                }
+            }
+        }
+    }
+}
+
 /// One panel: frame, ticks, labels, and the three series against `x_of`.
 fn panel(
     svg: &mut String,
@@ -141,72 +214,7 @@ fn panel(
     );
     // Decade grid lines, ticks and labels; minor ticks at 2..9 × 10^k.
     for (axis, horizontal) in [(x, true), (y, false)] {
-        let step = axis.label_step();
-        for k in axis.lo..=axis.hi {
-            let f = (k - axis.lo) as f64 / (axis.hi - axis.lo) as f64;
-            let labelled = (k - axis.lo) % step == 0;
-            if horizontal {
-                let xp = left + f * PANEL_W;
-                let _ = writeln!(
-                    svg,
-                    r##"<line x1="{xp:.2}" y1="{top}" x2="{xp:.2}" y2="{bottom}" stroke="#e4e4e4"/>"##
-                );
-                let _ = writeln!(
-                    svg,
-                    r##"<line x1="{xp:.2}" y1="{bottom}" x2="{xp:.2}" y2="{:.2}" stroke="#333333"/>"##,
-                    bottom + 6.0
-                );
-                if labelled {
-                    let _ = writeln!(
-                        svg,
-                        r#"<text x="{xp:.2}" y="{:.2}" text-anchor="middle">{}</text>"#,
-                        bottom + 22.0,
-                        decade_label(k)
-                    );
-                }
-            } else {
-                let yp = bottom - f * PANEL_H;
-                let _ = writeln!(
-                    svg,
-                    r##"<line x1="{left}" y1="{yp:.2}" x2="{:.2}" y2="{yp:.2}" stroke="#e4e4e4"/>"##,
-                    left + PANEL_W
-                );
-                let _ = writeln!(
-                    svg,
-                    r##"<line x1="{:.2}" y1="{yp:.2}" x2="{left}" y2="{yp:.2}" stroke="#333333"/>"##,
-                    left - 6.0
-                );
-                if labelled {
-                    let _ = writeln!(
-                        svg,
-                        r#"<text x="{:.2}" y="{:.2}" text-anchor="end">{}</text>"#,
-                        left - 9.0,
-                        yp + 4.0,
-                        decade_label(k)
-                    );
-                }
-            }
-            if k < axis.hi {
-                for m in 2..=9 {
-                    let g = f + (m as f64).log10() / (axis.hi - axis.lo) as f64;
-                    if horizontal {
-                        let xp = left + g * PANEL_W;
-                        let _ = writeln!(
-                            svg,
-                            r##"<line x1="{xp:.2}" y1="{bottom}" x2="{xp:.2}" y2="{:.2}" stroke="#333333"/>"##,
-                            bottom + 3.0
-                        );
-                    } else {
-                        let yp = bottom - g * PANEL_H;
-                        let _ = writeln!(
-                            svg,
-                            r##"<line x1="{:.2}" y1="{yp:.2}" x2="{left}" y2="{yp:.2}" stroke="#333333"/>"##,
-                            left - 3.0
-                        );
-                    }
-                }
-            }
-        }
+        ticks(svg, axis, horizontal, left);
     }
     let _ = writeln!(
         svg,
@@ -330,7 +338,8 @@ mod tests {
         assert_eq!((a.lo, a.hi), (-5, 0));
         let b = LogAxis::covering([0.5, 0.5].into_iter());
         assert_eq!((b.lo, b.hi), (-1, 0));
-        assert!((a.frac(1e-5) - 0.0).abs() < 1e-12 && (a.frac(1.0) - 1.0).abs() < 1e-12);
+        radcol_core::assert_close!(a.frac(1e-5), 0.0, 1e-12);
+        radcol_core::assert_close!(a.frac(1.0), 1.0, 1e-12);
     }
 
     #[test]

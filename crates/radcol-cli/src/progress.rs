@@ -2,7 +2,7 @@
 //! files and CI logs get the report alone.
 
 use indicatif::{ProgressBar, ProgressStyle};
-use radcol_core::run::{Progress, ProgressHandle};
+use radcol_core::progress::{Progress, ProgressHandle};
 use std::io::IsTerminal;
 use std::sync::Arc;
 use std::time::Duration;

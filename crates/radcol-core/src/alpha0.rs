@@ -114,7 +114,36 @@ pub fn find_alpha0(r: usize) -> Alpha0Report {
         .map(|s| s.precision())
         .unwrap_or(r);
 
-    let (alpha0, reason) = if r.is_multiple_of(2) {
+    let (alpha0, reason) = verdict(
+        r,
+        &accepted,
+        &rejected_roots,
+        best_alpha,
+        best_defect,
+        precision_at_best,
+    );
+    Alpha0Report {
+        degree: r,
+        alpha0,
+        best_alpha,
+        best_defect,
+        precision_at_best,
+        rejected_roots,
+        reason,
+    }
+}
+
+/// α0 and the sentence that says what the search found: none for even r;
+/// the first accepted root for odd r; else the rejected roots as evidence.
+fn verdict(
+    r: usize,
+    accepted: &[(f64, f64)],
+    rejected_roots: &[(f64, f64)],
+    best_alpha: f64,
+    best_defect: f64,
+    precision_at_best: usize,
+) -> (Option<f64>, String) {
+    if r.is_multiple_of(2) {
         (
             None,
             format!(
@@ -146,26 +175,27 @@ pub fn find_alpha0(r: usize) -> Alpha0Report {
                 if evidence.is_empty() { "" } else { "; " }
             ),
         )
-    };
-    Alpha0Report {
-        degree: r,
-        alpha0,
-        best_alpha,
-        best_defect,
-        precision_at_best,
-        rejected_roots,
-        reason,
     }
 }
 
-/// The α that `--alpha auto` uses: α0 when it exists, else the defect minimiser
-/// (for r = 0 any α; we return 0.1, which the centroid node ignores).
+impl Alpha0Report {
+    /// The α that "auto" uses: α0 when it exists, else the defect minimiser
+    /// (for r = 0 any α; we return 0.1, which the centroid node ignores).
+    pub fn auto_alpha(&self) -> f64 {
+        if self.degree == 0 {
+            return 0.1;
+        }
+        self.alpha0.unwrap_or(self.best_alpha)
+    }
+}
+
+/// [`Alpha0Report::auto_alpha`] of degree `r` (searches α0; callers that
+/// also need the report should call [`find_alpha0`] once and keep it).
 pub fn auto_alpha(r: usize) -> f64 {
     if r == 0 {
         return 0.1;
     }
-    let rep = find_alpha0(r);
-    rep.alpha0.unwrap_or(rep.best_alpha)
+    find_alpha0(r).auto_alpha()
 }
 
 /// Bisection to full double precision on a bracket with a sign change.
@@ -235,7 +265,7 @@ mod tests {
     fn alpha0_of_degree_one_is_one_sixth() {
         let rep = find_alpha0(1);
         let a = rep.alpha0.expect("α0(1) exists");
-        assert!((a - 1.0 / 6.0).abs() < 1e-15, "{a}");
+        crate::assert_close!(a, 1.0 / 6.0, 1e-15, "{a}");
         assert_eq!(rep.precision_at_best, 2);
     }
 

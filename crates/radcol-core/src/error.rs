@@ -55,20 +55,54 @@ pub enum InputError {
         position: DVec3,
     },
     /// The dense matrix would not fit in memory.
-    #[error("{unknowns} unknowns need a dense {unknowns}×{unknowns} matrix: {:.2} GiB for the matrix (plus {:.2} GiB for an LU copy), but only {:.2} GiB of memory is available; lower --level or --degree", *bytes_matrix as f64 / 1073741824.0, *bytes_lu as f64 / 1073741824.0, *bytes_available as f64 / 1073741824.0)]
+    #[error("{unknowns} unknowns need a dense {unknowns}×{unknowns} matrix: {} for the matrix (plus {} for an LU copy), but only {} of memory is available; use a coarser mesh or a lower degree", gib(*bytes_matrix), gib(*bytes_lu), gib(*bytes_available as f64))]
     TooLarge {
         /// Number of unknowns N.
-        unknowns: usize,
-        /// Bytes for the geometric matrix.
-        bytes_matrix: u64,
+        unknowns: u64,
+        /// Bytes for the geometric matrix (8 N²).
+        bytes_matrix: f64,
         /// Extra bytes for a dense LU.
-        bytes_lu: u64,
+        bytes_lu: f64,
         /// Bytes available.
         bytes_available: u64,
     },
-    /// Anything else about the problem set-up.
-    #[error("{0}")]
-    Other(String),
+    /// A maximum edge length that is not a positive finite number.
+    #[error("max edge length {value} must be a positive finite number (scene units)")]
+    MaxEdge {
+        /// The length asked for.
+        value: f64,
+    },
+    /// A curved surface that may occlude itself: radcol clips flat elements only.
+    #[error("surface '{surface}': patch '{patch}' is curved and the surface is not known to bound a convex set; radcol models occlusion between flat triangles only (set Surface::convex_enclosure when the surface does bound a convex set)")]
+    CurvedOcclusion {
+        /// The surface's name.
+        surface: String,
+        /// The first curved patch.
+        patch: String,
+    },
+    /// A refinement study of a problem without an exact solution.
+    #[error("a study measures errors against the exact solution, and this problem has none")]
+    NoExactSolution,
+    /// A backend asked for a precision it does not compute in.
+    #[error("the {backend} backend computes in {supported} only; {asked} needs the GPU backend")]
+    Precision {
+        /// The backend.
+        backend: crate::backend::BackendKind,
+        /// What it computes in.
+        supported: crate::backend::Scalar,
+        /// What was asked for.
+        asked: crate::backend::Scalar,
+    },
+}
+
+/// Bytes as GiB with three significant digits (scientific beyond 10⁶ GiB).
+fn gib(bytes: f64) -> String {
+    let g = bytes / 1073741824.0;
+    if g < 1e6 {
+        format!("{g:.2} GiB")
+    } else {
+        format!("{g:.3e} GiB")
+    }
 }
 
 /// Every error the library returns.
@@ -82,11 +116,11 @@ pub enum Error {
     #[error(transparent)]
     Solve(#[from] crate::solve::SolveError),
     /// An assembly backend failed (GPU device lost, validation error, …).
-    #[error("assembly backend '{backend}': {message}")]
+    #[error("assembly backend '{backend}': {source}")]
     Backend {
-        /// Backend name.
-        backend: String,
-        /// What happened.
-        message: String,
+        /// Which backend.
+        backend: crate::backend::BackendKind,
+        /// The backend's own typed error.
+        source: Box<dyn std::error::Error + Send + Sync>,
     },
 }

@@ -32,7 +32,7 @@ mod tests {
         for &p in &pts {
             for &q in &pts {
                 if p != q {
-                    assert!((g(p, -p, q, -q) - 0.25).abs() < 1e-15);
+                    crate::assert_close!(g(p, -p, q, -q), 0.25, 1e-15);
                 }
             }
         }
@@ -44,6 +44,6 @@ mod tests {
         let q = DVec3::new(0.0, 0.0, 1.0);
         assert_eq!(g(p, DVec3::Z, q, DVec3::Z), 0.0); // Q faces away
         assert_eq!(g(p, -DVec3::Z, q, -DVec3::Z), 0.0); // P faces away
-        assert!((g(p, DVec3::Z, q, -DVec3::Z) - 1.0).abs() < 1e-16);
+        crate::assert_close!(g(p, DVec3::Z, q, -DVec3::Z), 1.0, 1e-16);
     }
 }

@@ -55,8 +55,11 @@
 //! assert_eq!(pixels.len(), 64 * 48);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+#![warn(missing_docs)]
+
 pub mod alpha0;
 pub mod assembly;
+pub mod backend;
 pub mod camera;
 pub mod discretization;
 pub mod error;
@@ -68,6 +71,7 @@ pub mod mesh;
 pub mod nodes;
 pub mod norms;
 pub mod problem;
+pub mod progress;
 pub mod quadrature;
 pub mod render;
 pub mod run;
@@ -75,4 +79,6 @@ pub mod scene;
 pub mod solution;
 pub mod solve;
 pub mod study;
+#[cfg(any(test, feature = "conformance"))]
+pub mod testing;
 pub mod visibility;

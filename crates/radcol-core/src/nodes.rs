@@ -16,6 +16,27 @@ use crate::quadrature::{collapsed::collapsed_rule, monomial_integral};
 /// Largest polynomial degree supported.
 pub const MAX_DEGREE: usize = 6;
 
+/// f_r = (r + 1)(r + 2) / 2: nodes per element at degree r.
+pub const fn nodes_per_element(r: usize) -> usize {
+    (r + 1) * (r + 2) / 2
+}
+
+/// `r` when radcol supports it (0..=[`MAX_DEGREE`]).
+pub fn check_degree(r: usize) -> Result<usize, InputError> {
+    if r > MAX_DEGREE {
+        return Err(InputError::Degree { degree: r });
+    }
+    Ok(r)
+}
+
+/// `alpha` when it lies strictly between 0 and 1/3 (every node interior).
+pub fn check_alpha(alpha: f64) -> Result<f64, InputError> {
+    if !(alpha > 0.0 && alpha < 1.0 / 3.0) {
+        return Err(InputError::Alpha { alpha });
+    }
+    Ok(alpha)
+}
+
 /// The collocation node set of degree `r` with parameter `alpha`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NodeSet {
@@ -33,11 +54,9 @@ impl NodeSet {
     /// Nodes of degree `r` ∈ 0..=6 and 0 < α < 1/3 (α is ignored for r = 0,
     /// whose single node is the centroid).
     pub fn new(r: usize, alpha: f64) -> Result<Self, InputError> {
-        if r > MAX_DEGREE {
-            return Err(InputError::Degree { degree: r });
-        }
-        if r > 0 && !(alpha > 0.0 && alpha < 1.0 / 3.0) {
-            return Err(InputError::Alpha { alpha });
+        check_degree(r)?;
+        if r > 0 {
+            check_alpha(alpha)?;
         }
         let mut indices = Vec::new();
         // Order: i + j ascending rows, as (13) enumerates them.
@@ -196,11 +215,11 @@ mod tests {
                 set.eval_basis(s, t, &mut l);
                 for (j, v) in l.iter().enumerate() {
                     let want = if j == k { 1.0 } else { 0.0 };
-                    assert!((v - want).abs() < 1e-13, "r={r} node {k} basis {j}: {v}");
+                    crate::assert_close!(v, want, 1e-13, "r={r} node {k} basis {j}: {v}");
                 }
             }
             set.eval_basis(0.77, 0.05, &mut l);
-            assert!((l.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+            crate::assert_close!(l.iter().sum::<f64>(), 1.0, 1e-12);
         }
     }
 
@@ -215,7 +234,7 @@ mod tests {
             for &(s, t) in &[(0.0, 0.0), (1.0, 0.0), (0.2, 0.7), (0.4, 0.1)] {
                 set.eval_basis(s, t, &mut l);
                 let interp: f64 = l.iter().zip(&vals).map(|(a, b)| a * b).sum();
-                assert!((interp - p(s, t)).abs() < 1e-10, "r={r}");
+                crate::assert_close!(interp, p(s, t), 1e-10, "r={r}");
             }
         }
     }
@@ -226,12 +245,13 @@ mod tests {
         // q_{1,0} = ((1 + 0·α)/3, (0 + 3α)/3) = (1/3, α).
         let k = set.indices().iter().position(|&ij| ij == (1, 0)).unwrap();
         let [s, t] = set.points()[k];
-        assert!((s - 1.0 / 3.0).abs() < 1e-16 && (t - 0.1).abs() < 1e-16);
+        crate::assert_close!(s, 1.0 / 3.0, 1e-16);
+        crate::assert_close!(t, 0.1, 1e-16);
         assert!(set
             .points()
             .iter()
             .all(|&[s, t]| s > 0.0 && t > 0.0 && s + t < 1.0));
-        assert!((set.weights().iter().sum::<f64>() - 0.5).abs() < 1e-15);
+        crate::assert_close!(set.weights().iter().sum::<f64>(), 0.5, 1e-15);
     }
 
     #[test]

@@ -1,10 +1,11 @@
 //! Refinement studies: solve on levels A..=B and report errors with their
 //! experimental orders of convergence (EOC).
 
+use crate::alpha0::Alpha0Report;
 use crate::assembly::AssemblyBackend;
 use crate::error::{Error, InputError};
 use crate::problem::Problem;
-use crate::run::{solve, SolveConfig};
+use crate::run::{check_size, solve, SolveConfig};
 use serde::Serialize;
 
 /// One level of a study.
@@ -80,21 +81,124 @@ pub fn fitted_order(h: &[f64], e: &[f64]) -> f64 {
     sxy / sxx
 }
 
+/// What the theory predicts for degree r at node parameter α.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PredictedOrders {
+    /// Order of the global max and L² errors, r + 1 (eq. 23).
+    pub global_max: usize,
+    /// The same for L².
+    pub l2: usize,
+    /// Order at the nodes, when the theory predicts one at this α: r + 2 for
+    /// even r (eq. 39), r + 3 (times log h) for odd r at α = α0 (eq. 36).
+    pub nodes_max: Option<usize>,
+    /// One sentence naming the equations.
+    pub note: String,
+}
+
+/// The orders the theory predicts for degree `r` at `alpha`, given the α0
+/// search for `r` (`a0`, from [`crate::alpha0::find_alpha0`]).
+pub fn predicted_orders(r: usize, alpha: f64, a0: &Alpha0Report) -> PredictedOrders {
+    let global = r + 1;
+    let head = format!("theory for r = {r}: global max and L2 O(h^{global}) (eq. 23); ");
+    let (nodes, tail) = if r.is_multiple_of(2) {
+        (
+            Some(r + 2),
+            format!("nodes O(h^{}) (even r, any α: eq. 39)", r + 2),
+        )
+    } else {
+        match a0.alpha0 {
+            Some(a) if (a - alpha).abs() <= 1e-12 => (
+                Some(r + 3),
+                format!("nodes O(h^{} log h) (odd r at α = α0: eq. 36)", r + 3),
+            ),
+            Some(a) => (
+                None,
+                format!(
+                    "nodes O(h^{} log h) only at α0 = {a} (this run uses α = {alpha})",
+                    r + 3
+                ),
+            ),
+            None => (
+                None,
+                format!(
+                    "nodes O(h^{} log h) needs α0, which does not exist for r = {r} (see `radcol nodes --degree {r}`)",
+                    r + 3
+                ),
+            ),
+        }
+    };
+    PredictedOrders {
+        global_max: global,
+        l2: global,
+        nodes_max: nodes,
+        note: head + &tail,
+    }
+}
+
+/// A refinement study that has been checked and may run: the problem has an
+/// exact solution and the finest level fits in memory, so a study that
+/// cannot finish is refused before its first level is solved.
+#[derive(Debug)]
+pub struct Study<'a> {
+    problem: &'a Problem,
+    base: SolveConfig,
+    levels: std::ops::RangeInclusive<u32>,
+}
+
+impl<'a> Study<'a> {
+    /// Checks `problem` and the finest of `levels` with `base`'s settings.
+    pub fn new(
+        problem: &'a Problem,
+        base: &SolveConfig,
+        levels: std::ops::RangeInclusive<u32>,
+    ) -> Result<Self, Error> {
+        if problem.exact.is_none() {
+            return Err(InputError::NoExactSolution.into());
+        }
+        check_size(
+            problem,
+            &SolveConfig {
+                level: *levels.end(),
+                ..base.clone()
+            },
+        )?;
+        Ok(Self {
+            problem,
+            base: base.clone(),
+            levels,
+        })
+    }
+
+    /// Solves on each level and collects the errors, calling `progress`
+    /// with each row as it completes.
+    pub fn run(
+        self,
+        backend: &dyn AssemblyBackend,
+        progress: impl FnMut(&StudyRow),
+    ) -> Result<Vec<StudyRow>, Error> {
+        run_levels(self.problem, &self.base, self.levels, backend, progress)
+    }
+}
+
 /// Solves on each level of `levels` and collects the errors (the problem must
-/// carry an exact solution).
+/// carry an exact solution): [`Study::new`] then [`Study::run`].
 pub fn study(
+    problem: &Problem,
+    base: &SolveConfig,
+    levels: std::ops::RangeInclusive<u32>,
+    backend: &dyn AssemblyBackend,
+    progress: impl FnMut(&StudyRow),
+) -> Result<Vec<StudyRow>, Error> {
+    Study::new(problem, base, levels)?.run(backend, progress)
+}
+
+fn run_levels(
     problem: &Problem,
     base: &SolveConfig,
     levels: std::ops::RangeInclusive<u32>,
     backend: &dyn AssemblyBackend,
     mut progress: impl FnMut(&StudyRow),
 ) -> Result<Vec<StudyRow>, Error> {
-    if problem.exact.is_none() {
-        return Err(InputError::Other(
-            "a study needs the exact solution: give --exact EXPR".into(),
-        )
-        .into());
-    }
     let mut rows: Vec<StudyRow> = Vec::new();
     for level in levels {
         let cfg = SolveConfig {
@@ -183,12 +287,12 @@ mod tests {
         assert_eq!(eoc(4e-16, 4e-16, 1.0, 0.5, 2.2e-13, 2.2e-13), None);
         assert_eq!(eoc(1e-9, 4e-16, 1.0, 0.5, 2.2e-13, 2.2e-13), None);
         let e = eoc(1e-6, 1e-6 / 16.0, 1.0, 0.5, 2.2e-13, 2.2e-13).unwrap();
-        assert!((e - 4.0).abs() < 1e-12);
+        crate::assert_close!(e, 4.0, 1e-12);
         let rows = [row(1.0, 1e-6), row(0.5, 1e-6 / 16.0), row(0.25, 4e-16)];
         let nodes = fitted_order_above_rounding(&rows, |r| r.nodes_max).unwrap();
-        assert!((nodes - 4.0).abs() < 1e-12, "{nodes}");
+        crate::assert_close!(nodes, 4.0, 1e-12, "{nodes}");
         let global = fitted_order_above_rounding(&rows, |r| r.global_max).unwrap();
-        assert!((global - 2.0).abs() < 1e-12);
+        crate::assert_close!(global, 2.0, 1e-12);
         assert_eq!(
             fitted_order_above_rounding(&rows[2..], |r| r.nodes_max),
             None

@@ -28,7 +28,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("device: {}", ctx.description());
     let mesh = Arc::new(Mesh::new(Arc::new(sphere(1.0)), 3));
     let disc = Arc::new(Discretization::new(mesh, NodeSet::new(2, 0.1)?));
-    let plan = AssemblyPlan::new(disc, QuadratureOptions::default());
+    let visibility = radcol_core::visibility::analyze(disc.mesh().surface());
+    let plan = AssemblyPlan::new(disc, QuadratureOptions::default(), &visibility);
     let n = plan.dim();
     let f = plan.discretization().nodes_per_element();
     let evals = plan.stats().far_kernel_evals as f64;
@@ -55,7 +56,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let r = fill_far_field(
             ctx.device(),
             ctx.queue(),
-            ctx.kernels(p)?,
+            ctx.kernels(b.precision())?,
             &plan,
             &b.tile_limits(),
             &mut m,

@@ -6,8 +6,9 @@ use crate::error::GpuError;
 use crate::far_field::fill_far_field;
 use crate::tiling::TileLimits;
 use crate::Precision;
-use radcol_core::assembly::plan::is_special;
-use radcol_core::assembly::{Assembled, AssemblyBackend, AssemblyPlan, BackendInfo, FillMode};
+use radcol_core::assembly::{
+    Assembled, AssemblyBackend, AssemblyPlan, BackendInfo, BackendKind, FillMode, PairClass, Scalar,
+};
 use radcol_core::error::Error;
 use radcol_core::matrix::DenseMatrix;
 use rayon::prelude::*;
@@ -18,7 +19,7 @@ use std::time::Instant;
 #[derive(Debug, Clone)]
 pub struct GpuBackend {
     ctx: Arc<GpuContext>,
-    precision: Precision,
+    precision: Scalar,
     limits: TileLimits,
 }
 
@@ -49,8 +50,8 @@ impl GpuBackend {
         self
     }
 
-    /// The precision the device computes in (`F64` or `F32`).
-    pub fn precision(&self) -> Precision {
+    /// The precision the device computes in.
+    pub fn precision(&self) -> Scalar {
         self.precision
     }
 
@@ -115,9 +116,9 @@ impl GpuBackend {
 impl AssemblyBackend for GpuBackend {
     fn info(&self) -> BackendInfo {
         BackendInfo {
-            kind: "gpu".into(),
+            kind: BackendKind::Gpu,
             device: self.ctx.description(),
-            precision: self.precision.name().into(),
+            precision: self.precision,
         }
     }
 
@@ -145,7 +146,11 @@ fn special_pairs(plan: &AssemblyPlan) -> Special {
     let n_dim = plan.dim();
     let classes = plan.classes();
     let kps: Vec<usize> = (0..n)
-        .filter(|&kp| classes[kp * n..(kp + 1) * n].iter().any(|&c| is_special(c)))
+        .filter(|&kp| {
+            classes[kp * n..(kp + 1) * n]
+                .iter()
+                .any(|&c| PairClass::from_code(c).is_special())
+        })
         .collect();
     let results: Vec<(SpecialBlock, u64)> = kps
         .par_iter()
@@ -155,7 +160,7 @@ fn special_pairs(plan: &AssemblyPlan) -> Special {
                 // SpecialOnly writes exactly the entries read back below.
                 let evals = plan.fill_block(kp, scratch, FillMode::SpecialOnly);
                 let pairs = (0..n)
-                    .filter(|&k| is_special(classes[kp * n + k]))
+                    .filter(|&k| PairClass::from_code(classes[kp * n + k]).is_special())
                     .map(|k| {
                         let mut vals = Vec::with_capacity(f * f);
                         for row in 0..f {

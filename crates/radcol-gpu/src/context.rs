@@ -5,6 +5,7 @@ use crate::error::GpuError;
 use crate::far_field::FarFieldKernels;
 use crate::tiling::TileLimits;
 use crate::Precision;
+use radcol_core::assembly::Scalar;
 use std::sync::Arc;
 
 /// Which adapters a context may use.
@@ -163,11 +164,11 @@ impl GpuContext {
     }
 
     /// `precision` with `Auto` resolved: f64 when supported, else f32.
-    pub fn resolve(&self, precision: Precision) -> Result<Precision, GpuError> {
+    pub fn resolve(&self, precision: Precision) -> Result<Scalar, GpuError> {
         match precision {
-            Precision::Auto if self.supports_f64() => Ok(Precision::F64),
-            Precision::Auto | Precision::F32 => Ok(Precision::F32),
-            Precision::F64 if self.supports_f64() => Ok(Precision::F64),
+            Precision::Auto if self.supports_f64() => Ok(Scalar::F64),
+            Precision::Auto | Precision::F32 => Ok(Scalar::F32),
+            Precision::F64 if self.supports_f64() => Ok(Scalar::F64),
             Precision::F64 => Err(GpuError::NoF64 {
                 adapter: self.info.name.clone(),
             }),
@@ -175,12 +176,12 @@ impl GpuContext {
     }
 
     /// The far-field pipelines for `precision`.
-    pub fn kernels(&self, precision: Precision) -> Result<&FarFieldKernels, GpuError> {
-        match self.resolve(precision)? {
-            Precision::F64 => self.f64_kernels.as_ref().ok_or_else(|| GpuError::NoF64 {
+    pub fn kernels(&self, precision: Scalar) -> Result<&FarFieldKernels, GpuError> {
+        match precision {
+            Scalar::F64 => self.f64_kernels.as_ref().ok_or_else(|| GpuError::NoF64 {
                 adapter: self.info.name.clone(),
             }),
-            _ => Ok(&self.f32_kernels),
+            Scalar::F32 => Ok(&self.f32_kernels),
         }
     }
 

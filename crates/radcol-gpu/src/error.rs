@@ -8,13 +8,13 @@
 #[non_exhaustive]
 pub enum GpuError {
     /// No adapter (or none of the kind asked for).
-    #[error("no GPU adapter found ({detail}); install a Vulkan driver (for a software one: apt-get install mesa-vulkan-drivers, i.e. lavapipe) or use --backend cpu")]
+    #[error("no GPU adapter found ({detail}); install a Vulkan driver (for a software one: apt-get install mesa-vulkan-drivers, i.e. lavapipe) or use the CPU backend")]
     NoAdapter {
         /// What was enumerated.
         detail: String,
     },
     /// f64 asked for on an adapter without `SHADER_F64`.
-    #[error("adapter '{adapter}' does not offer SHADER_F64; use --precision f32 (or auto)")]
+    #[error("adapter '{adapter}' does not offer SHADER_F64; use f32 precision (or auto)")]
     NoF64 {
         /// Adapter name.
         adapter: String,
@@ -93,8 +93,8 @@ impl GpuError {
 impl From<GpuError> for radcol_core::error::Error {
     fn from(e: GpuError) -> Self {
         radcol_core::error::Error::Backend {
-            backend: "gpu".into(),
-            message: e.to_string(),
+            backend: radcol_core::assembly::BackendKind::Gpu,
+            source: Box::new(e),
         }
     }
 }

@@ -12,7 +12,7 @@
 //! * [`far_field::fill_far_field`]: the work function, taking `&Device, &Queue`.
 //! * [`GpuBackend`]: implements core's
 //!   [`AssemblyBackend`](radcol_core::assembly::AssemblyBackend).
-//! * [`backend_from_name`]: `cpu` / `gpu` / `auto`, for the CLI.
+//! * [`select_backend`]: [`BackendChoice`] `Cpu` / `Gpu` / `Auto` and a [`Precision`].
 //!
 //! The CPU/GPU split, tiling and precision rules are described in this
 //! crate's `README.md`.
@@ -28,10 +28,12 @@
 //! use std::sync::Arc;
 //!
 //! // `auto` is a hardware GPU when there is one, else the CPU backend.
-//! let backend = radcol_gpu::backend_from_name("auto", None)?;
+//! use radcol_gpu::{select_backend, BackendChoice, Precision};
+//! let backend = select_backend(BackendChoice::Auto, Precision::Auto)?;
 //! let mesh = Arc::new(Mesh::new(Arc::new(sphere(1.0)), 0));
 //! let disc = Arc::new(Discretization::new(mesh, NodeSet::new(0, 0.1)?));
-//! let plan = AssemblyPlan::new(disc, QuadratureOptions::default());
+//! let visibility = radcol_core::visibility::analyze(disc.mesh().surface());
+//! let plan = AssemblyPlan::new(disc, QuadratureOptions::default(), &visibility);
 //! let out = backend.assemble(&plan)?;
 //! let info = backend.info();
 //! println!("{} on {} in {}", info.kind, info.device, info.precision);
@@ -40,6 +42,8 @@
 //! assert!((row - 1.0).abs() < 1e-6);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+
+#![warn(missing_docs)]
 
 pub mod backend;
 pub mod context;
@@ -55,7 +59,7 @@ pub mod tiling;
 pub use backend::GpuBackend;
 pub use context::{AdapterFilter, GpuContext};
 pub use error::GpuError;
-pub use select::backend_from_name;
+pub use select::{select_backend, BackendChoice};
 pub use tiling::TileLimits;
 
 use std::fmt;
@@ -75,7 +79,7 @@ pub enum Precision {
 
 impl Precision {
     /// "auto", "f64" or "f32".
-    pub fn name(self) -> &'static str {
+    pub const fn name(self) -> &'static str {
         match self {
             Precision::Auto => "auto",
             Precision::F64 => "f64",

@@ -1,7 +1,7 @@
 //! WGSL sources (from `shaders/` at the workspace root) and the one-line
 //! preamble that picks the precision.
 
-use crate::Precision;
+use radcol_core::assembly::Scalar;
 
 /// A WGSL file of `shaders/`, compiled into the crate.
 #[derive(Clone, Copy, Debug)]
@@ -27,17 +27,16 @@ pub const SHADERS: &[ShaderFile] = &[FAR_FIELD];
 /// The precision preamble: the scalar alias every shader is written against.
 /// naga needs no `enable` directive for f64; the device needs
 /// [`wgpu::Features::SHADER_F64`].
-pub fn preamble(precision: Precision) -> &'static str {
+pub fn preamble(precision: Scalar) -> &'static str {
     match precision {
-        Precision::F32 => "alias scalar = f32;\n",
-        // Auto resolves before compiling; treat it as the wider type.
-        Precision::F64 | Precision::Auto => "alias scalar = f64;\n",
+        Scalar::F32 => "alias scalar = f32;\n",
+        Scalar::F64 => "alias scalar = f64;\n",
     }
 }
 
 /// `file`'s source with the preamble of `precision` prepended: exactly what is
 /// handed to the device.
-pub fn source_for(file: &ShaderFile, precision: Precision) -> String {
+pub fn source_for(file: &ShaderFile, precision: Scalar) -> String {
     let mut s = String::with_capacity(file.source.len() + 32);
     s.push_str(preamble(precision));
     s.push_str(file.source);

@@ -4,13 +4,13 @@
 //! backend. No GPU needed.
 
 use naga::valid::{Capabilities, ValidationFlags, Validator};
+use radcol_core::assembly::Scalar;
 use radcol_gpu::layout::{Params, PointF32, PointF64, RuleInfo};
 use radcol_gpu::shader::{source_for, ShaderFile, SHADERS};
-use radcol_gpu::Precision;
 use std::mem::{offset_of, size_of};
 use std::path::PathBuf;
 
-const PRECISIONS: [Precision; 2] = [Precision::F64, Precision::F32];
+const PRECISIONS: [Scalar; 2] = [Scalar::F64, Scalar::F32];
 
 fn shaders_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shaders")
@@ -18,12 +18,12 @@ fn shaders_dir() -> PathBuf {
 
 /// Parses and validates `file` for `precision`; f32 must validate without the
 /// FLOAT64 capability (it runs on adapters that lack it).
-fn module(file: &ShaderFile, precision: Precision) -> naga::Module {
+fn module(file: &ShaderFile, precision: Scalar) -> naga::Module {
     let src = source_for(file, precision);
     let module = naga::front::wgsl::parse_str(&src)
         .unwrap_or_else(|e| panic!("{} ({precision}): {}", file.name, e.emit_to_string(&src)));
     let caps = match precision {
-        Precision::F32 => Capabilities::empty(),
+        Scalar::F32 => Capabilities::empty(),
         _ => Capabilities::FLOAT64,
     };
     Validator::new(ValidationFlags::all(), caps)
@@ -75,7 +75,7 @@ fn every_shader_parses_and_validates_in_each_precision() {
 #[test]
 fn the_scalar_alias_switches_precision() {
     for file in SHADERS {
-        let src = source_for(file, Precision::F64);
+        let src = source_for(file, Scalar::F64);
         let m = naga::front::wgsl::parse_str(&src).unwrap();
         let r = Validator::new(ValidationFlags::all(), Capabilities::empty()).validate(&m);
         assert!(
@@ -93,7 +93,7 @@ fn kernels_use_only_exact_builtins() {
     use naga::MathFunction as M;
     let allowed = [M::Max, M::Min, M::Abs, M::Sqrt, M::Fma];
     for file in SHADERS {
-        let m = module(file, Precision::F64);
+        let m = module(file, Scalar::F64);
         let functions = m
             .functions
             .iter()
@@ -116,7 +116,7 @@ fn kernels_use_only_exact_builtins() {
 /// The shader's accumulator length is the host's limit on f_r.
 #[test]
 fn accumulator_length_matches_the_host() {
-    let m = module(&radcol_gpu::shader::FAR_FIELD, Precision::F64);
+    let m = module(&radcol_gpu::shader::FAR_FIELD, Scalar::F64);
     let (_, c) = m
         .constants
         .iter()
@@ -199,7 +199,7 @@ fn host_structs_match_naga_layouts() {
             ],
         );
         match p {
-            Precision::F32 => check(
+            Scalar::F32 => check(
                 "Point",
                 size_of::<PointF32>(),
                 &[

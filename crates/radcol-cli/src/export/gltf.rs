@@ -186,10 +186,10 @@ mod tests {
         // Vertex 1: radiosity (π, 0.5, 2) is radiance (1, 0.5/π, 2/π), clamped linearly.
         let want = [1.0, 0.5 / std::f64::consts::PI, 2.0 / std::f64::consts::PI];
         for k in 0..3 {
-            assert!((c[1][k] as f64 - want[k]).abs() < 1e-7);
+            radcol_core::assert_close!(c[1][k] as f64, want[k], 1e-7);
         }
         // The PLY's 8-bit sRGB blue (209) decodes to the same linear colour to within a code.
-        assert!((srgb_decode(209.0 / 255.0) - c[1][2] as f64).abs() < 0.005);
+        radcol_core::assert_close!(srgb_decode(209.0 / 255.0), c[1][2] as f64, 0.005);
         let i: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
         assert_eq!(i, [0, 1, 2, 3, 4, 5]);
     }

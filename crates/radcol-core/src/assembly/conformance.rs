@@ -6,10 +6,9 @@
 //! point by point through [`ElementIntegrator::apply_rule`](super::ElementIntegrator::apply_rule) and
 //! [`crate::kernel::g`] instead of the vectorised run loop.
 
-use super::plan::{CLASS_CULLED, CLASS_NEAR, CLASS_PARTIAL, CLASS_SELF};
-use super::{AssemblyBackend, AssemblyPlan, CpuBackend, FieldPoint, QuadratureOptions};
+use super::{AssemblyBackend, AssemblyPlan, CpuBackend, FieldPoint, PairClass, QuadratureOptions};
 use crate::discretization::Discretization;
-use crate::geometry::shapes::{box_room, ellipsoid, sphere};
+use crate::geometry::shapes::{box_room, ellipsoid, room_with_cube, sphere};
 use crate::geometry::Surface;
 use crate::matrix::DenseMatrix;
 use crate::mesh::Mesh;
@@ -23,51 +22,8 @@ fn plan(surface: Surface, r: usize, level: u32) -> AssemblyPlan {
         mesh,
         NodeSet::new(r, 0.1).expect("0.1 is a valid alpha"),
     ));
-    AssemblyPlan::new(disc, QuadratureOptions::default())
-}
-
-/// A room [0, 2]³ (normals in) with a floating cube [0.7, 1.3]³ (normals out):
-/// a flat scene that occludes, so its plans hold partly visible pairs.
-pub fn room_with_cube() -> Surface {
-    let corner = |lo: f64, hi: f64, i: usize| {
-        glam::DVec3::new(
-            if i & 1 == 0 { lo } else { hi },
-            if i & 2 == 0 { lo } else { hi },
-            if i & 4 == 0 { lo } else { hi },
-        )
-    };
-    // Quads counter-clockwise seen from outside the box.
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let patch = |name: &str, lo: f64, hi: f64, inward: bool| {
-        let triangles = quads
-            .iter()
-            .flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]])
-            .map(|t: [usize; 3]| {
-                let t = if inward { [t[0], t[2], t[1]] } else { t };
-                t.map(|i| corner(lo, hi, i))
-            })
-            .collect();
-        crate::geometry::Patch {
-            name: name.into(),
-            map: Arc::new(crate::geometry::Identity),
-            triangles,
-        }
-    };
-    Surface {
-        name: "room with cube".into(),
-        patches: vec![
-            patch("room", 0.0, 2.0, true),
-            patch("cube", 0.7, 1.3, false),
-        ],
-        convex_enclosure: false,
-    }
+    let visibility = crate::visibility::analyze(disc.mesh().surface());
+    AssemblyPlan::new(disc, QuadratureOptions::default(), &visibility)
 }
 
 /// The conformance cases: sphere, ellipsoid (1, 1.5, 0.8), box room
@@ -205,12 +161,12 @@ pub fn generic_matrix(plan: &AssemblyPlan) -> DenseMatrix {
             };
             for k in 0..n {
                 let out = &mut row[k * f..(k + 1) * f];
-                match plan.classes()[p.element * n + k] {
-                    CLASS_CULLED => {}
-                    CLASS_NEAR | CLASS_SELF => {
+                match plan.class(p.element, k) {
+                    PairClass::Culled => {}
+                    PairClass::Near | PairClass::OnElement => {
                         integrator.integrate(&fp, k, nodes.degree(), &phi, out);
                     }
-                    CLASS_PARTIAL => {
+                    PairClass::Partial => {
                         plan.integrate_partial(
                             &integrator,
                             p.position,
@@ -221,8 +177,8 @@ pub fn generic_matrix(plan: &AssemblyPlan) -> DenseMatrix {
                             out,
                         );
                     }
-                    code => {
-                        let rule = plan.ladder().rule((code - 1) as usize);
+                    PairClass::Far(d) => {
+                        let rule = plan.ladder().rule(d as usize);
                         let tri = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
                         integrator.apply_rule(&fp, k, tri, rule, &phi, out);
                     }

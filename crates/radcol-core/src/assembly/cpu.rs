@@ -1,6 +1,6 @@
 //! The CPU backend: row blocks filled in parallel with rayon, no unsafe.
 
-use super::{Assembled, AssemblyBackend, BackendInfo, FillMode};
+use super::{Assembled, AssemblyBackend, BackendInfo, BackendKind, FillMode, Scalar};
 use crate::assembly::AssemblyPlan;
 use crate::error::Error;
 use crate::matrix::DenseMatrix;
@@ -14,9 +14,9 @@ pub struct CpuBackend;
 impl AssemblyBackend for CpuBackend {
     fn info(&self) -> BackendInfo {
         BackendInfo {
-            kind: "cpu".into(),
+            kind: BackendKind::Cpu,
             device: format!("{} rayon threads", rayon::current_num_threads()),
-            precision: "f64".into(),
+            precision: Scalar::F64,
         }
     }
 

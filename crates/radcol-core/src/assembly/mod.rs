@@ -9,6 +9,7 @@
 //! [`AssemblyBackend`] executes the plan ([`CpuBackend`] here, the GPU backend in
 //! `radcol-gpu`).
 
+#[cfg(any(test, feature = "conformance"))]
 pub mod conformance;
 pub mod cpu;
 pub mod integrate;
@@ -16,7 +17,9 @@ pub mod plan;
 
 pub use cpu::CpuBackend;
 pub use integrate::{ElementIntegrator, FieldPoint, QuadratureOptions, VisibilityMode};
-pub use plan::{AssemblyPlan, FarTable, FillMode, PlanStats};
+pub use plan::{AssemblyPlan, FarTable, FillMode, PairClass, PlanStats};
+
+pub use crate::backend::{BackendKind, Scalar};
 
 use crate::error::Error;
 use crate::matrix::DenseMatrix;
@@ -25,12 +28,19 @@ use serde::Serialize;
 /// What executed an assembly: for reports and JSON.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct BackendInfo {
-    /// "cpu" or "gpu".
-    pub kind: String,
+    /// CPU or GPU.
+    pub kind: BackendKind,
     /// Device description (adapter name and driver, or thread count).
     pub device: String,
-    /// "f64" or "f32".
-    pub precision: String,
+    /// The precision the matrix was computed in.
+    pub precision: Scalar,
+}
+
+impl std::fmt::Display for BackendInfo {
+    /// `cpu (2 rayon threads, f64)`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} ({}, {})", self.kind, self.device, self.precision)
+    }
 }
 
 /// The result of one assembly.

@@ -109,6 +109,50 @@ pub fn box_room(lx: f64, ly: f64, lz: f64) -> Surface {
     }
 }
 
+/// A room [0, 2]³ (normals in) with a floating cube [0.7, 1.3]³ (normals out):
+/// a flat scene that occludes, so its plans hold partly visible pairs.
+pub fn room_with_cube() -> Surface {
+    let corner = |lo: f64, hi: f64, i: usize| {
+        DVec3::new(
+            if i & 1 == 0 { lo } else { hi },
+            if i & 2 == 0 { lo } else { hi },
+            if i & 4 == 0 { lo } else { hi },
+        )
+    };
+    // Quads counter-clockwise seen from outside the box.
+    let quads = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let patch = |name: &str, lo: f64, hi: f64, inward: bool| {
+        let triangles = quads
+            .iter()
+            .flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]])
+            .map(|t: [usize; 3]| {
+                let t = if inward { [t[0], t[2], t[1]] } else { t };
+                t.map(|i| corner(lo, hi, i))
+            })
+            .collect();
+        Patch {
+            name: name.into(),
+            map: Arc::new(Identity),
+            triangles,
+        }
+    };
+    Surface {
+        name: "room with cube".into(),
+        patches: vec![
+            patch("room", 0.0, 2.0, true),
+            patch("cube", 0.7, 1.3, false),
+        ],
+        convex_enclosure: false,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

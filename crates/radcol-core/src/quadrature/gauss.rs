@@ -61,7 +61,7 @@ mod tests {
             for k in 0..2 * n {
                 let q: f64 = x.iter().zip(&w).map(|(x, w)| w * x.powi(k as i32)).sum();
                 let exact = 1.0 / (k as f64 + 1.0);
-                assert!((q - exact).abs() < 2e-15, "n={n} k={k}: {q} vs {exact}");
+                crate::assert_close!(q, exact, 2e-15, "n={n} k={k}: {q} vs {exact}");
             }
             // At degree 2n the error is the closed form (n!)^4 / ((2n+1) ((2n)!)^2) > 0.
             if n <= 8 {

@@ -92,7 +92,7 @@ pub(crate) mod tests {
     /// Every monomial of degree ≤ d is integrated to 1e-14 relative.
     pub(crate) fn assert_exact_to_degree(rule: &TriangleRule, d: usize) {
         let total: f64 = rule.weights.iter().sum();
-        assert!((total - 0.5).abs() < 1e-14, "weights sum to {total}");
+        crate::assert_close!(total, 0.5, 1e-14, "weights sum to {total}");
         assert!(rule.weights.iter().all(|&w| w > 0.0));
         assert!(rule
             .points
@@ -118,10 +118,10 @@ pub(crate) mod tests {
 
     #[test]
     fn monomial_integrals() {
-        assert!((monomial_integral(0, 0) - 0.5).abs() < 1e-16);
-        assert!((monomial_integral(1, 0) - 1.0 / 6.0).abs() < 1e-16);
-        assert!((monomial_integral(1, 1) - 1.0 / 24.0).abs() < 1e-16);
-        assert!((monomial_integral(2, 3) - 2.0 * 6.0 / 5040.0).abs() < 1e-18);
+        crate::assert_close!(monomial_integral(0, 0), 0.5, 1e-16);
+        crate::assert_close!(monomial_integral(1, 0), 1.0 / 6.0, 1e-16);
+        crate::assert_close!(monomial_integral(1, 1), 1.0 / 24.0, 1e-16);
+        crate::assert_close!(monomial_integral(2, 3), 2.0 * 6.0 / 5040.0, 1e-18);
     }
 
     #[test]

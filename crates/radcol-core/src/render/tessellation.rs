@@ -67,7 +67,7 @@ mod tests {
                 );
                 area += 0.5 * cross;
             }
-            assert!((area - 0.5).abs() < 1e-13);
+            crate::assert_close!(area, 0.5, 1e-13);
             // Lattice points are distinct and exact multiples of 1/n.
             for (k, &[s, t]) in p.iter().enumerate() {
                 let (i, j) = ((s * n as f64).round(), (t * n as f64).round());

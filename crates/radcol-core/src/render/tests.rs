@@ -60,7 +60,7 @@ fn hits_land_at_element_and_st() {
                 (hit.st[0] - s).abs() < 1e-12 && (hit.st[1] - t).abs() < 1e-12,
                 "{hit:?}"
             );
-            assert!((hit.t - 1.0).abs() < 1e-12);
+            crate::assert_close!(hit.t, 1.0, 1e-12);
             assert!(hit.front);
             // From just outside the wall, along the inner normal: the back face.
             let n = mesh.point(k, s, t).normal;
@@ -68,7 +68,7 @@ fn hits_land_at_element_and_st() {
             let back = bvh.closest_hit(outside, p - outside).expect("hit");
             assert_eq!(back.element, k);
             assert!(!back.front);
-            assert!((back.t - 1.0).abs() < 1e-12);
+            crate::assert_close!(back.t, 1.0, 1e-12);
             // Pointing away from the room misses.
             assert!(bvh.closest_hit(outside, outside - p).is_none());
         }
@@ -95,7 +95,7 @@ fn rays_through_shared_edges_and_corners_hit() {
             let hit = bvh
                 .closest_hit(o, p - o)
                 .expect("ray through a shared vertex or edge");
-            assert!((hit.t - 1.0).abs() < 1e-12);
+            crate::assert_close!(hit.t, 1.0, 1e-12);
             let q = affine(&mesh, hit.element, hit.st[0], hit.st[1]);
             assert!((q - p).length() < 1e-12, "{p} vs {q}");
         }
@@ -130,7 +130,8 @@ fn far_from_origin() {
         // The first surface along the ray may be another wall, but never beyond p.
         assert!(hit.t <= 1.0 + 1e-12);
         if hit.element == k {
-            assert!((hit.st[0] - 0.25).abs() < 1e-9 && (hit.st[1] - 0.25).abs() < 1e-9);
+            crate::assert_close!(hit.st[0], 0.25, 1e-9);
+            crate::assert_close!(hit.st[1], 0.25, 1e-9);
         }
         // From outside, everything seen is a back face.
         assert!(!hit.front);
@@ -211,7 +212,7 @@ fn back_faces_black_misses_background() {
     for (px, &cov) in img.rgb.iter().zip(&img.coverage) {
         for c in 0..3 {
             let want = (1.0 - cov) * bg[c];
-            assert!((px[c] - want).abs() < 1e-6);
+            crate::assert_close!(px[c], want, 1e-6);
         }
     }
 }
@@ -314,7 +315,7 @@ fn vertex_mesh_values_and_area() {
             let q = DVec3::from(vm.positions[v].map(f64::from));
             assert!((p - q).length() < 1e-6);
             let nrm = DVec3::from(vm.normals[v].map(f64::from));
-            assert!((nrm.length() - 1.0).abs() < 1e-6);
+            crate::assert_close!(nrm.length(), 1.0, 1e-6);
             // The inner normal of a box wall points straight at the centre plane.
             assert!(nrm.dot(centre - p) > 0.0);
         }
@@ -332,11 +333,11 @@ fn vertex_mesh_values_and_area() {
         area += 0.5 * cross.length();
         per_element[k as usize] += 0.5 * cross.length();
     }
-    assert!((area - 27.0).abs() < 1e-5, "{area}");
-    assert!((area - mesh.area()).abs() < 1e-5);
+    crate::assert_close!(area, 27.0, 1e-5, "{area}");
+    crate::assert_close!(area, mesh.area(), 1e-5);
     for k in 0..mesh.len() {
         let [a, b, c] = mesh.vertices(k);
-        assert!((per_element[k] - 0.5 * (b - a).cross(c - a).length()).abs() < 1e-6);
+        crate::assert_close!(per_element[k], 0.5 * (b - a).cross(c - a).length(), 1e-6);
     }
     // Three channels come back as three channels.
     let w = interpolate(&mesh, 0, |_| 3.0);

@@ -163,17 +163,17 @@ mod tests {
     #[test]
     fn srgb_curve() {
         assert_eq!(srgb_encode(0.0), 0.0);
-        assert!((srgb_encode(1.0) - 1.0).abs() < 1e-15);
-        assert!((srgb_encode(0.5) - 0.735_356_983_052_9).abs() < 1e-12);
-        assert!((srgb_encode(0.001) - 0.01292).abs() < 1e-15);
-        assert!((srgb_encode(0.18) - 0.461_356_129_500_4).abs() < 1e-12);
+        crate::assert_close!(srgb_encode(1.0), 1.0, 1e-15);
+        crate::assert_close!(srgb_encode(0.5), 0.735_356_983_052_9, 1e-12);
+        crate::assert_close!(srgb_encode(0.001), 0.01292, 1e-15);
+        crate::assert_close!(srgb_encode(0.18), 0.461_356_129_500_4, 1e-12);
         // The two pieces meet at the breakpoint (to the standard's 4-digit constants).
         let a = 12.92 * 0.0031308;
         let b = 1.055 * 0.0031308f64.powf(1.0 / 2.4) - 0.055;
-        assert!((a - b).abs() < 1e-7);
+        crate::assert_close!(a, b, 1e-7);
         for i in 0..=100 {
             let y = i as f64 / 100.0;
-            assert!((srgb_decode(srgb_encode(y)) - y).abs() < 1e-12);
+            crate::assert_close!(srgb_decode(srgb_encode(y)), y, 1e-12);
         }
         let tm = ToneMap {
             exposure: 0.0,
@@ -219,7 +219,7 @@ mod tests {
         }
         // Reinhard at 1 is exactly 1/2; ACES at 1 is 2.54/3.16.
         assert_eq!(ToneOperator::Reinhard.apply(1.0), 0.5);
-        assert!((ToneOperator::Aces.apply(1.0) - 2.54 / 3.16).abs() < 1e-15);
+        crate::assert_close!(ToneOperator::Aces.apply(1.0), 2.54 / 3.16, 1e-15);
         // One stop doubles the input to the curve.
         let tm = ToneMap {
             exposure: 1.0,
@@ -244,9 +244,9 @@ mod tests {
             auto: true,
         };
         let s = tm.scale(&values, Some(&coverage));
-        assert!((s - 1.0 / 99.0).abs() < 1e-15);
+        crate::assert_close!(s, 1.0 / 99.0, 1e-15);
         let lin = tm.apply_linear(&values, Some(&coverage));
-        assert!((lin[32][0] as f64 - 1.0 / 3.0).abs() < 1e-7);
+        crate::assert_close!(lin[32][0] as f64, 1.0 / 3.0, 1e-7);
         assert_eq!(lin[98], [1.0; 3]);
         // Colour weights: pure green of luminance 0.7152 · g.
         let tm2 = ToneMap {
@@ -254,7 +254,7 @@ mod tests {
             ..tm
         };
         let s = tm2.scale(&[[0.0, 1.0, 0.0]], None);
-        assert!((s - 2.0 / 0.7152).abs() < 1e-12);
+        crate::assert_close!(s, 2.0 / 0.7152, 1e-12);
         // All black: no auto scale.
         assert_eq!(tm2.scale(&[[0.0; 3]; 4], None), 2.0);
     }

@@ -100,75 +100,17 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
         let keyword = words.next().unwrap_or("");
         let mut pass = true;
         match keyword {
-            "v" => {
-                let nums: Vec<f64> = words
-                    .map(|w| w.parse::<f64>())
-                    .collect::<Result<_, _>>()
-                    .map_err(|_| syntax(at(line_no), format!("cannot parse vertex '{line}'")))?;
-                if nums.len() < 3 {
-                    return Err(syntax(
-                        at(line_no),
-                        format!("vertex needs 3 coordinates: '{line}'"),
-                    ));
-                }
-                if let Some(&x) = nums[..3].iter().find(|x| !x.is_finite()) {
-                    return Err(SceneError::Vertex {
-                        at: at(line_no),
-                        value: x,
-                    });
-                }
-                let mut v = DVec3::new(nums[0], nums[1], nums[2]);
-                // A fourth number is the homogeneous weight w (tobj divides by it too).
-                if nums.len() == 4 {
-                    if !(nums[3].is_finite() && nums[3] != 0.0) {
-                        return Err(SceneError::Vertex {
-                            at: at(line_no),
-                            value: nums[3],
-                        });
-                    }
-                    v /= nums[3];
-                }
-                positions.push(v);
-            }
+            "v" => positions.push(parse_vertex(line, words, &at(line_no))?),
             "f" => {
-                let mut vertices = Vec::new();
-                for w in words {
-                    let first = w.split('/').next().unwrap_or("");
-                    let index: i64 = first.parse().map_err(|_| {
-                        syntax(at(line_no), format!("cannot parse face index '{w}'"))
-                    })?;
-                    let n = positions.len() as i64;
-                    let resolved = if index < 0 { n + index } else { index - 1 };
-                    if index == 0 || resolved < 0 || resolved >= n {
-                        return Err(SceneError::IndexOutOfRange {
-                            at: at(line_no),
-                            index,
-                            count: positions.len(),
-                        });
-                    }
-                    vertices.push(resolved as usize);
-                }
-                if vertices.len() < 3 {
-                    return Err(SceneError::TooFewVertices {
-                        at: at(line_no),
-                        count: vertices.len(),
-                    });
-                }
+                let vertices = parse_face(words, &positions, &at(line_no))?;
                 let Some(material) = material else {
                     return Err(SceneError::NoMaterial {
                         at: at(line_no),
                         message: "no usemtl statement before it".into(),
                     });
                 };
-                if vertices.len() > 3 {
-                    let p: Vec<DVec3> = vertices.iter().map(|&v| positions[v]).collect();
-                    if let Some(off) = non_planarity(&p) {
-                        warnings.push(format!(
-                            "{}: polygon with {} vertices is not planar (a vertex lies {off:.3e} of its diameter off its plane); fan-triangulated from its first vertex",
-                            at(line_no),
-                            p.len()
-                        ));
-                    }
+                if let Some(w) = planarity_warning(&vertices, &positions, &at(line_no)) {
+                    warnings.push(w);
                 }
                 faces.push(ScanFace {
                     line: line_no,
@@ -189,18 +131,10 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
             }
             "mtllib" => {
                 let lib = rest(line, keyword);
-                if lib.is_empty() {
-                    return Err(syntax(at(line_no), "mtllib without a file name"));
-                }
-                let (label, mtl_text) =
-                    resolve(lib).map_err(|(mtl, message)| SceneError::MaterialLibrary {
-                        at: at(line_no),
-                        mtl,
-                        message,
-                    })?;
-                for m in parse_mtl(&label, &mtl_text)? {
-                    by_name.insert(m.name.clone(), materials.len());
-                    materials.push(m);
+                let first = materials.len();
+                let mtl_text = read_mtllib(lib, resolve, &at(line_no), &mut materials)?;
+                for (m, mat) in materials.iter().enumerate().skip(first) {
+                    by_name.insert(mat.name.clone(), m);
                 }
                 libs.insert(lib.to_string(), mtl_text);
             }
@@ -240,6 +174,109 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
         camera: None,
         warnings,
         source: None,
+    })
+}
+
+/// Reads the material library `lib` of an `mtllib` statement through
+/// `resolve` and appends its materials; returns the library's text.
+fn read_mtllib(
+    lib: &str,
+    resolve: &Resolver,
+    at: &str,
+    materials: &mut Vec<Material>,
+) -> Result<String, SceneError> {
+    if lib.is_empty() {
+        return Err(syntax(at.to_string(), "mtllib without a file name"));
+    }
+    let (label, mtl_text) = resolve(lib).map_err(|(mtl, message)| SceneError::MaterialLibrary {
+        at: at.to_string(),
+        mtl,
+        message,
+    })?;
+    materials.extend(parse_mtl(&label, &mtl_text)?);
+    Ok(mtl_text)
+}
+
+/// A `v x y z [w]` statement: finite coordinates, divided by w when given.
+fn parse_vertex<'a>(
+    line: &str,
+    words: impl Iterator<Item = &'a str>,
+    at: &str,
+) -> Result<DVec3, SceneError> {
+    let nums: Vec<f64> = words
+        .map(|w| w.parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| syntax(at.to_string(), format!("cannot parse vertex '{line}'")))?;
+    if nums.len() < 3 {
+        return Err(syntax(
+            at.to_string(),
+            format!("vertex needs 3 coordinates: '{line}'"),
+        ));
+    }
+    if let Some(&x) = nums[..3].iter().find(|x| !x.is_finite()) {
+        return Err(SceneError::Vertex {
+            at: at.to_string(),
+            value: x,
+        });
+    }
+    let mut v = DVec3::new(nums[0], nums[1], nums[2]);
+    // A fourth number is the homogeneous weight w (tobj divides by it too).
+    if nums.len() == 4 {
+        if !(nums[3].is_finite() && nums[3] != 0.0) {
+            return Err(SceneError::Vertex {
+                at: at.to_string(),
+                value: nums[3],
+            });
+        }
+        v /= nums[3];
+    }
+    Ok(v)
+}
+
+/// The vertex indices of an `f` statement (1-based or negative, resolved
+/// against the `positions` read so far); at least three.
+fn parse_face<'a>(
+    words: impl Iterator<Item = &'a str>,
+    positions: &[DVec3],
+    at: &str,
+) -> Result<Vec<usize>, SceneError> {
+    let mut vertices = Vec::new();
+    for w in words {
+        let first = w.split('/').next().unwrap_or("");
+        let index: i64 = first
+            .parse()
+            .map_err(|_| syntax(at.to_string(), format!("cannot parse face index '{w}'")))?;
+        let n = positions.len() as i64;
+        let resolved = if index < 0 { n + index } else { index - 1 };
+        if index == 0 || resolved < 0 || resolved >= n {
+            return Err(SceneError::IndexOutOfRange {
+                at: at.to_string(),
+                index,
+                count: positions.len(),
+            });
+        }
+        vertices.push(resolved as usize);
+    }
+    if vertices.len() < 3 {
+        return Err(SceneError::TooFewVertices {
+            at: at.to_string(),
+            count: vertices.len(),
+        });
+    }
+    Ok(vertices)
+}
+
+/// The warning for a polygon of more than three vertices that is not planar.
+fn planarity_warning(vertices: &[usize], positions: &[DVec3], at: &str) -> Option<String> {
+    if vertices.len() <= 3 {
+        return None;
+    }
+    let p: Vec<DVec3> = vertices.iter().map(|&v| positions[v]).collect();
+    non_planarity(&p).map(|off| {
+        format!(
+            "{at}: polygon with {} vertices is not planar (a vertex lies {off:.3e} of its diameter off its plane); fan-triangulated from its first vertex",
+            p.len()
+        )
     })
 }
 

@@ -56,7 +56,7 @@ fn loads_a_square_with_materials() {
     assert_eq!(s.vertex_count(), 4);
     assert_eq!(s.surface.patches.len(), 1);
     assert_eq!(s.surface.patches[0].name, "floor/white");
-    assert!((s.area() - 1.0).abs() < 1e-15);
+    crate::assert_close!(s.area(), 1.0, 1e-15);
     let [a, b, c] = s.surface.patches[0].triangles[0];
     assert!(
         (b - a).cross(c - a).z > 0.0,
@@ -310,7 +310,7 @@ fn scaled_scales_the_bounding_box() {
     let t = s.scaled(2.5);
     let (lo, hi) = s.bounding_box();
     assert_eq!(t.bounding_box(), (lo * 2.5, hi * 2.5));
-    assert!((t.area() - 6.25 * s.area()).abs() < 1e-12 * t.area());
+    crate::assert_close!(t.area(), 6.25 * s.area(), 1e-12 * t.area());
     assert_eq!(t.materials, s.materials);
 }
 

@@ -134,12 +134,49 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
     );
     let scale = (hi - lo).length();
 
-    // Degenerate and duplicate triangles.
+    let (kept, degenerate) = drop_degenerate_and_duplicates(triangles, scale, &mut warnings);
+    if kept.is_empty() {
+        return Err(SceneError::Empty {
+            name,
+            detail: format!(" after dropping {degenerate} degenerate triangles"),
+        });
+    }
+
+    let tris: Vec<[DVec3; 3]> = kept.iter().map(|t| t.vertices).collect();
+    non_manifold_edges(&tris, &kept, &mut warnings);
+    t_junctions(&tris, &kept, scale, &mut warnings);
+
+    let (patches, patch_material) = patches_by_group(&kept, &materials);
+    let surface = Surface {
+        name: name.clone(),
+        patches,
+        convex_enclosure: is_convex_enclosure(&tris),
+    };
+    Ok(Scene {
+        name,
+        surface: Arc::new(surface),
+        materials,
+        patch_material,
+        camera,
+        warnings,
+        source,
+    })
+}
+
+/// Drops degenerate triangles (area at most 1e-12 of the squared scene
+/// diagonal `scale`) and duplicates (same vertices, same orientation), with
+/// a capped warning for each; returns the kept triangles and how many were
+/// degenerate.
+fn drop_degenerate_and_duplicates(
+    triangles: Vec<RawTriangle>,
+    scale: f64,
+    warnings: &mut Vec<String>,
+) -> (Vec<RawTriangle>, usize) {
     let mut kept: Vec<RawTriangle> = Vec::with_capacity(triangles.len());
     let mut seen: HashMap<[[u64; 3]; 3], usize> = HashMap::new();
     let mut degenerate = 0;
     {
-        let mut deg = Capped::new(&mut warnings, "degenerate-triangle");
+        let mut deg = Capped::new(warnings, "degenerate-triangle");
         let mut dup_list = Vec::new();
         for t in triangles {
             let [a, b, c] = t.vertices;
@@ -167,27 +204,21 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
             }
         }
         drop(deg);
-        let mut dup = Capped::new(&mut warnings, "duplicate-triangle");
+        let mut dup = Capped::new(warnings, "duplicate-triangle");
         for m in dup_list {
             dup.push(m);
         }
     }
-    if kept.is_empty() {
-        return Err(SceneError::Empty {
-            name,
-            detail: format!(" after dropping {degenerate} degenerate triangles"),
-        });
-    }
+    (kept, degenerate)
+}
 
-    let tris: Vec<[DVec3; 3]> = kept.iter().map(|t| t.vertices).collect();
-    non_manifold_edges(&tris, &kept, &mut warnings);
-    t_junctions(&tris, &kept, scale, &mut warnings);
-
-    // One patch per (group, material), in order of first appearance.
+/// One patch per (group, material), in order of first appearance, with
+/// each patch's material.
+fn patches_by_group(kept: &[RawTriangle], materials: &[Material]) -> (Vec<Patch>, Vec<usize>) {
     let mut patch_of: HashMap<(String, usize), usize> = HashMap::new();
     let mut patches: Vec<Patch> = Vec::new();
     let mut patch_material = Vec::new();
-    for t in &kept {
+    for t in kept {
         let j = *patch_of
             .entry((t.group.clone(), t.material))
             .or_insert_with(|| {
@@ -201,20 +232,7 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
             });
         patches[j].triangles.push(t.vertices);
     }
-    let surface = Surface {
-        name: name.clone(),
-        patches,
-        convex_enclosure: is_convex_enclosure(&tris),
-    };
-    Ok(Scene {
-        name,
-        surface: Arc::new(surface),
-        materials,
-        patch_material,
-        camera,
-        warnings,
-        source,
-    })
+    (patches, patch_material)
 }
 
 /// Warns about edges shared by more than two triangles (hashing sorted

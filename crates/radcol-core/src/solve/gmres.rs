@@ -112,15 +112,7 @@ pub fn gmres(
     let mut iterations = 0usize;
     let mut cycles = 0usize;
     loop {
-        // True residual r = b - A x.
-        op.apply(x, &mut r);
-        if !all_finite(&r) {
-            return Err(SolveError::NonFinite);
-        }
-        for (ri, &bi) in r.iter_mut().zip(b) {
-            *ri = bi - *ri;
-        }
-        let beta = dot(&r, &r).sqrt();
+        let beta = residual(op, b, x, &mut r)?;
         if beta <= tol {
             return Ok(GmresInfo {
                 iterations,
@@ -157,47 +149,12 @@ pub fn gmres(
                 return Err(SolveError::NonFinite);
             }
             let col = &mut h[j * ld..(j + 1) * ld];
-            col.fill(0.0);
-            // Modified Gram–Schmidt, then one reorthogonalisation pass.
-            for _pass in 0..2 {
-                for (i, v) in done.chunks_exact(n).enumerate() {
-                    let hij = dot(w, v);
-                    for (wk, &vk) in w.iter_mut().zip(v) {
-                        *wk -= hij * vk;
-                    }
-                    col[i] += hij;
-                }
-            }
-            let h_next = dot(w, w).sqrt();
-            col[j + 1] = h_next;
-            // A zero h_next is a "happy breakdown": the Krylov space is
-            // invariant and the LS solution below is exact. Do not divide.
-            if h_next > 0.0 {
-                for wk in w.iter_mut() {
-                    *wk /= h_next;
-                }
-            }
-
-            // Apply the previous rotations to the new column, then a new
-            // rotation that annihilates col[j+1].
-            for i in 0..j {
-                let (a, c) = (col[i], col[i + 1]);
-                col[i] = cs[i] * a + sn[i] * c;
-                col[i + 1] = -sn[i] * a + cs[i] * c;
-            }
-            let (a, c) = (col[j], col[j + 1]);
-            let rho = a.hypot(c);
-            if rho == 0.0 {
+            let h_next = orthogonalise(done, w, col, j);
+            if !rotate(col, &mut cs, &mut sn, &mut g, j) {
                 // A v_j is in span(v_0..v_{j-1}) and adds nothing: the
                 // triangular system would be singular, so drop column j.
                 break;
             }
-            cs[j] = a / rho;
-            sn[j] = c / rho;
-            col[j] = rho;
-            col[j + 1] = 0.0;
-            g[j + 1] = -sn[j] * g[j];
-            g[j] *= cs[j];
             k = j + 1;
 
             if g[j + 1].abs() <= tol || h_next == 0.0 {
@@ -205,20 +162,93 @@ pub fn gmres(
             }
         }
 
-        // Solve the k × k upper-triangular system H y = g (y stored in g),
-        // then x += V_k y.
-        for i in (0..k).rev() {
-            let mut s = g[i];
-            for l in i + 1..k {
-                s -= h[l * ld + i] * g[l];
+        update(&h, ld, &mut g, k, &basis, x);
+    }
+}
+
+/// The true residual r = b - A x; returns its norm.
+fn residual(
+    op: &dyn LinearOperator,
+    b: &[f64],
+    x: &[f64],
+    r: &mut [f64],
+) -> Result<f64, SolveError> {
+    op.apply(x, r);
+    if !all_finite(r) {
+        return Err(SolveError::NonFinite);
+    }
+    for (ri, &bi) in r.iter_mut().zip(b) {
+        *ri = bi - *ri;
+    }
+    Ok(dot(r, r).sqrt())
+}
+
+/// Column j of the Hessenberg matrix: w (= A v_j) is orthogonalised against
+/// v_0..v_j (`done`, contiguous) by modified Gram–Schmidt and one
+/// reorthogonalisation pass, then normalised; `col` receives the
+/// coefficients and h_{j+1,j}, which is returned.
+fn orthogonalise(done: &[f64], w: &mut [f64], col: &mut [f64], j: usize) -> f64 {
+    let n = w.len();
+    col.fill(0.0);
+    for _pass in 0..2 {
+        for (i, v) in done.chunks_exact(n).enumerate() {
+            let hij = dot(w, v);
+            for (wk, &vk) in w.iter_mut().zip(v) {
+                *wk -= hij * vk;
             }
-            g[i] = s / h[i * ld + i];
+            col[i] += hij;
         }
-        for (i, v) in basis.chunks_exact(n).take(k).enumerate() {
-            let yi = g[i];
-            for (xk, &vk) in x.iter_mut().zip(v) {
-                *xk += yi * vk;
-            }
+    }
+    let h_next = dot(w, w).sqrt();
+    col[j + 1] = h_next;
+    // A zero h_next is a "happy breakdown": the Krylov space is
+    // invariant and the LS solution is exact. Do not divide.
+    if h_next > 0.0 {
+        for wk in w.iter_mut() {
+            *wk /= h_next;
+        }
+    }
+    h_next
+}
+
+/// Applies the previous Givens rotations to column j, then a new rotation
+/// that annihilates col[j+1], updating the rotated right-hand side g.
+/// False when the column is zero after the previous rotations.
+fn rotate(col: &mut [f64], cs: &mut [f64], sn: &mut [f64], g: &mut [f64], j: usize) -> bool {
+    for i in 0..j {
+        let (a, c) = (col[i], col[i + 1]);
+        col[i] = cs[i] * a + sn[i] * c;
+        col[i + 1] = -sn[i] * a + cs[i] * c;
+    }
+    let (a, c) = (col[j], col[j + 1]);
+    let rho = a.hypot(c);
+    if rho == 0.0 {
+        return false;
+    }
+    cs[j] = a / rho;
+    sn[j] = c / rho;
+    col[j] = rho;
+    col[j + 1] = 0.0;
+    g[j + 1] = -sn[j] * g[j];
+    g[j] *= cs[j];
+    true
+}
+
+/// Solves the k × k upper-triangular system H y = g (y stored in g), then
+/// x += V_k y.
+fn update(h: &[f64], ld: usize, g: &mut [f64], k: usize, basis: &[f64], x: &mut [f64]) {
+    let n = x.len();
+    for i in (0..k).rev() {
+        let mut s = g[i];
+        for l in i + 1..k {
+            s -= h[l * ld + i] * g[l];
+        }
+        g[i] = s / h[i * ld + i];
+    }
+    for (i, v) in basis.chunks_exact(n).take(k).enumerate() {
+        let yi = g[i];
+        for (xk, &vk) in x.iter_mut().zip(v) {
+            *xk += yi * vk;
         }
     }
 }
@@ -366,7 +396,7 @@ mod tests {
         assert!(info.iterations <= 3, "{info:?}");
         for i in 0..n {
             let expect = 1.0 / [1.0, 2.0, 4.0][i % 3];
-            assert!((x[i] - expect).abs() < 1e-13);
+            crate::assert_close!(x[i], expect, 1e-13);
         }
         // identity: one iteration
         let mut id = vec![0.0; n * n];

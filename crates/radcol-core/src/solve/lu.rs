@@ -214,7 +214,7 @@ mod tests {
         let mut b = vec![7.0, 6.0, 11.0];
         lu.solve_in_place(&mut b).unwrap();
         for (got, want) in b.iter().zip([1.0, 2.0, 3.0]) {
-            assert!((got - want).abs() < 1e-14, "{b:?}");
+            crate::assert_close!(got, want, 1e-14, "{b:?}");
         }
     }
 

@@ -171,10 +171,10 @@ mod tests {
         // P on the plane x = 0.5 facing +x: the part x > 0.5 of the element,
         // a triangle with legs 0.5: area 0.125 in (s, t).
         let pieces = visible_region(DVec3::new(0.5, 0.0, 1.0), DVec3::X, &v, &occ, &[]);
-        assert!((total(&pieces) - 0.125).abs() < 1e-15, "{}", total(&pieces));
+        crate::assert_close!(total(&pieces), 0.125, 1e-15, "{}", total(&pieces));
         // Facing -x: the rest.
         let pieces = visible_region(DVec3::new(0.5, 0.0, 1.0), -DVec3::X, &v, &occ, &[]);
-        assert!((total(&pieces) - 0.375).abs() < 1e-15);
+        crate::assert_close!(total(&pieces), 0.375, 1e-15);
     }
 
     /// A square occluder half way between P and the element hides a square of
@@ -200,7 +200,7 @@ mod tests {
             // (s, t) area × 2 × element area (2 here) = physical area.
             hidden += (0.5 - visible) * 2.0 * 2.0;
         }
-        assert!((hidden - 1.0).abs() < 1e-13, "hidden area {hidden}");
+        crate::assert_close!(hidden, 1.0, 1e-13, "hidden area {hidden}");
     }
 
     /// An occluder behind P or beyond the element hides nothing.
@@ -224,6 +224,6 @@ mod tests {
         let occ = Occluders::new(&[behind_p, below]);
         let p = DVec3::new(0.0, 0.0, 2.0);
         let pieces = visible_region(p, -DVec3::Z, &v, &occ, &[0, 1]);
-        assert!((total(&pieces) - 0.5).abs() < 1e-15);
+        crate::assert_close!(total(&pieces), 0.5, 1e-15);
     }
 }

@@ -7,20 +7,44 @@
 
 pub mod clip;
 pub mod occluders;
+pub(crate) mod walk;
 
 pub use occluders::Occluders;
 
+use crate::error::InputError;
 use crate::geometry::Surface;
 use glam::DVec3;
 use serde::Serialize;
 
-/// Whether a surface needs visibility tests, and why.
+/// Whether a surface needs visibility tests, and why: decided once per
+/// surface ([`analyze`]) and carried through the pipeline to the plan and
+/// the reports.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct VisibilityAnalysis {
     /// True when some pair of points may be occluded.
     pub needed: bool,
     /// One sentence for reports.
     pub reason: String,
+    /// The surface's name and its first curved patch, when visibility is
+    /// needed because of it: radcol clips flat elements only, so such a
+    /// surface is refused ([`VisibilityAnalysis::check_supported`]).
+    #[serde(skip)]
+    pub curved: Option<(String, String)>,
+}
+
+impl VisibilityAnalysis {
+    /// Refuses a surface whose occlusion radcol cannot model (a curved patch
+    /// in a surface not known to bound a convex set), instead of returning a
+    /// silently wrong answer.
+    pub fn check_supported(&self) -> Result<(), InputError> {
+        match &self.curved {
+            Some((surface, patch)) => Err(InputError::CurvedOcclusion {
+                surface: surface.clone(),
+                patch: patch.clone(),
+            }),
+            None => Ok(()),
+        }
+    }
 }
 
 /// The mapped straight triangles of every base triangle, oriented as given.
@@ -47,6 +71,7 @@ pub fn analyze(surface: &Surface) -> VisibilityAnalysis {
             needed: false,
             reason: "no visibility tests: the surface lies on the boundary of a convex set, facing inward"
                 .into(),
+            curved: None,
         };
     }
     if let Some(p) = surface.patches.iter().find(|p| !p.map.is_affine()) {
@@ -56,6 +81,7 @@ pub fn analyze(surface: &Surface) -> VisibilityAnalysis {
                 "visibility needed: patch '{}' is curved and the surface is not known to bound a convex set",
                 p.name
             ),
+            curved: Some((surface.name.clone(), p.name.clone())),
         };
     }
     let tris = base_triangles(surface);
@@ -65,6 +91,7 @@ pub fn analyze(surface: &Surface) -> VisibilityAnalysis {
             reason: "no visibility tests: every triangle's plane has the whole scene on its front side \
                      (the scene lies on the boundary of a convex set, facing inward)"
                 .into(),
+            curved: None,
         },
         Some((t, v)) => VisibilityAnalysis {
             needed: true,
@@ -73,6 +100,7 @@ pub fn analyze(surface: &Surface) -> VisibilityAnalysis {
                  so parts of the scene may hide others",
                 v.x, v.y, v.z
             ),
+            curved: None,
         },
     }
 }

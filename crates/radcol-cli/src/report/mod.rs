@@ -1,0 +1,82 @@
+//! Reports: one `#[derive(Serialize)]` struct per command, JSON from serde
+//! and text from `Display` of the same struct, so both list the same fields.
+//! Pure formatting: every number comes from core.
+
+mod info;
+mod nodes;
+mod solve;
+mod study;
+
+pub use info::{
+    BoundingBox, ElementSize, Estimate, InfoReport, MaterialInfo, SceneInfo, ShapeRatio,
+};
+pub use nodes::NodesReport;
+pub use solve::{SolveReport, Written};
+pub use study::{StudyFooter, StudyHeader, StudyLine, StudyReport};
+
+use serde::Serialize;
+use std::fmt::Display;
+use std::io::Write;
+
+/// Writes `report` to `w`: pretty JSON when `json`, else its text.
+pub fn emit<T: Serialize + Display>(
+    w: &mut dyn Write,
+    report: &T,
+    json: bool,
+) -> anyhow::Result<()> {
+    if json {
+        // Rendered first so that a closed stdout surfaces as a plain io::Error.
+        let text = serde_json::to_string_pretty(&serde_json::to_value(report)?)?;
+        writeln!(w, "{text}")?;
+    } else {
+        write!(w, "{report}")?;
+    }
+    Ok(())
+}
+
+/// `1.234e-5`: errors, residuals, counts per second.
+fn sci(v: f64) -> String {
+    format!("{v:.3e}")
+}
+
+/// Seconds with a sensible number of digits.
+fn secs(v: f64) -> String {
+    if v >= 100.0 {
+        format!("{v:.1} s")
+    } else if v >= 0.01 {
+        format!("{v:.3} s")
+    } else {
+        format!("{:.3} ms", v * 1e3)
+    }
+}
+
+/// "α = 0.1666 (auto)", or why α does not matter.
+fn alpha_text(alpha: f64, auto: bool, degree: usize) -> String {
+    match (auto, degree) {
+        (_, 0) => "α unused (r = 0: the centroid node)".into(),
+        (true, _) => format!("α = {alpha} (auto)"),
+        (false, _) => format!("α = {alpha}"),
+    }
+}
+
+/// The problem as given: ρ, E and u (texts).
+#[derive(Clone, Debug, Serialize)]
+pub struct ProblemText {
+    /// ρ.
+    pub rho: String,
+    /// E.
+    pub emission: String,
+    /// u, when known.
+    pub exact: Option<String>,
+}
+
+impl ProblemText {
+    /// The texts of `s`.
+    pub fn of(s: &crate::setup::Setup) -> Self {
+        Self {
+            rho: s.rho.clone(),
+            emission: s.emission.clone(),
+            exact: s.exact.clone(),
+        }
+    }
+}

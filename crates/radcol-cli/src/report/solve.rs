@@ -1,0 +1,317 @@
+//! `radcol solve`: mesh, problem, visibility, backend, assembly, timings and
+//! per-channel results.
+
+use super::{alpha_text, sci, secs, ProblemText};
+use crate::setup::Setup;
+use radcol_core::assembly::{BackendInfo, VisibilityMode};
+use radcol_core::norms::ErrorNorms;
+use radcol_core::run::{SolveOutcome, SolverKind, SolverReport, Timings};
+use radcol_core::visibility::VisibilityAnalysis;
+use serde::Serialize;
+use std::fmt;
+
+/// A file `radcol solve` wrote.
+#[derive(Clone, Debug, Serialize)]
+pub struct Written {
+    /// Where.
+    pub path: String,
+    /// What it holds, one phrase ("38 node rows", "640×480 image").
+    pub what: String,
+    /// Seconds spent making and writing it.
+    pub seconds: f64,
+}
+
+/// Smallest and largest of a quantity.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Range {
+    /// Smallest.
+    pub min: f64,
+    /// Largest.
+    pub max: f64,
+}
+
+/// Solver settings as used.
+#[derive(Clone, Debug, Serialize)]
+pub struct Settings {
+    gmres_rel_tol: f64,
+    gmres_restart: usize,
+    gmres_max_iters: usize,
+    quad_tol: f64,
+    visibility: VisibilityMode,
+}
+
+/// Work of the assembly.
+#[derive(Clone, Debug, Serialize)]
+pub struct AssemblyWork {
+    kernel_evals: u64,
+    kernel_evals_per_s: Option<f64>,
+    pairs_far: u64,
+    pairs_near: u64,
+    pairs_self: u64,
+    pairs_culled: u64,
+    pairs_partial: u64,
+    far_kernel_evals: u64,
+    device_s: Option<f64>,
+}
+
+/// One material of a scene.
+#[derive(Clone, Debug, Serialize)]
+pub struct MaterialShort {
+    name: String,
+    rho: [f64; 3],
+    emission: [f64; 3],
+}
+
+/// One channel's result.
+#[derive(Clone, Debug, Serialize)]
+pub struct ChannelReport {
+    name: String,
+    solver: SolverReport,
+    integral_u: f64,
+    integral_e: f64,
+    errors: Option<ErrorNorms>,
+}
+
+/// What a scene with materials holds, for the text report.
+#[derive(Clone, Debug)]
+struct SceneSummary {
+    triangles: usize,
+    materials: usize,
+    emitters: Vec<String>,
+}
+
+/// Everything `radcol solve` reports.
+#[derive(Clone, Debug, Serialize)]
+pub struct SolveReport {
+    command: &'static str,
+    scene: String,
+    degree: usize,
+    alpha: f64,
+    alpha_auto: bool,
+    level: u32,
+    max_edge: Option<f64>,
+    elements: usize,
+    unknowns: usize,
+    h: f64,
+    shape_ratio: Range,
+    problem: ProblemText,
+    settings: Settings,
+    backend: BackendInfo,
+    solver: Option<SolverReport>,
+    timings: Timings,
+    assembly: AssemblyWork,
+    visibility: VisibilityAnalysis,
+    materials: Option<Vec<MaterialShort>>,
+    channels: Vec<ChannelReport>,
+    out: Vec<Written>,
+    #[serde(skip)]
+    contents: Option<SceneSummary>,
+}
+
+impl SolveReport {
+    /// The report of `out`, solved for `s`, with the files `written`.
+    pub fn new(s: &Setup, out: &SolveOutcome, written: &[Written]) -> Self {
+        let disc = &out.discretization;
+        let (sr_lo, sr_hi) = disc.mesh().shape_ratio_range();
+        let p = &out.plan;
+        let t = &out.timings;
+        let scene = s.loaded.scene();
+        Self {
+            command: "solve",
+            scene: s.scene.clone(),
+            degree: s.cfg.degree,
+            alpha: s.alpha.value,
+            alpha_auto: s.alpha.auto,
+            level: s.cfg.level,
+            max_edge: s.cfg.max_edge,
+            elements: disc.mesh().len(),
+            unknowns: disc.len(),
+            h: out.h,
+            shape_ratio: Range {
+                min: sr_lo,
+                max: sr_hi,
+            },
+            problem: ProblemText::of(s),
+            settings: Settings {
+                gmres_rel_tol: s.cfg.gmres.rel_tol,
+                gmres_restart: s.cfg.gmres.restart,
+                gmres_max_iters: s.cfg.gmres.max_iters,
+                quad_tol: s.cfg.quad.tol,
+                visibility: s.cfg.quad.visibility,
+            },
+            backend: out.backend.clone(),
+            solver: out.channels.first().map(|c| c.solver.clone()),
+            timings: *t,
+            assembly: AssemblyWork {
+                kernel_evals: out.kernel_evals,
+                kernel_evals_per_s: (t.assembly_s > 0.0)
+                    .then(|| out.kernel_evals as f64 / t.assembly_s),
+                pairs_far: p.pairs_far,
+                pairs_near: p.pairs_near,
+                pairs_self: p.pairs_self,
+                pairs_culled: p.pairs_culled,
+                pairs_partial: p.pairs_partial,
+                far_kernel_evals: p.far_kernel_evals,
+                device_s: out.device_seconds,
+            },
+            visibility: out.visibility.clone(),
+            materials: scene.map(|sc| {
+                sc.materials
+                    .iter()
+                    .map(|m| MaterialShort {
+                        name: m.name.clone(),
+                        rho: m.rho,
+                        emission: m.emission,
+                    })
+                    .collect()
+            }),
+            channels: out
+                .channels
+                .iter()
+                .map(|c| ChannelReport {
+                    name: c.name.clone(),
+                    solver: c.solver.clone(),
+                    integral_u: c.integral_u,
+                    integral_e: c.integral_e,
+                    errors: c.errors,
+                })
+                .collect(),
+            out: written.to_vec(),
+            contents: scene.map(|sc| SceneSummary {
+                triangles: sc.triangle_count(),
+                materials: sc.materials.len(),
+                emitters: sc
+                    .materials
+                    .iter()
+                    .filter(|m| m.is_emitter())
+                    .map(|m| m.name.clone())
+                    .collect(),
+            }),
+        }
+    }
+
+    fn fmt_assembly(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let a = &self.assembly;
+        let rate = match a.kernel_evals_per_s {
+            Some(r) => format!("{}/s", sci(r)),
+            None => "-".into(),
+        };
+        let partial = if self.visibility.needed {
+            let how = match self.settings.visibility {
+                VisibilityMode::Clip => "clipped",
+                VisibilityMode::Rays => "rays per quadrature point",
+            };
+            format!(", {} partly visible ({how})", a.pairs_partial)
+        } else {
+            String::new()
+        };
+        writeln!(
+            f,
+            "  assembly    pairs: {} far, {} near, {} self, {} culled{partial}; {} kernel evaluations ({rate}){}",
+            a.pairs_far,
+            a.pairs_near,
+            a.pairs_self,
+            a.pairs_culled,
+            a.kernel_evals,
+            a.device_s
+                .map(|d| format!(", device {}", secs(d)))
+                .unwrap_or_default()
+        )
+    }
+
+    fn fmt_channels(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for ch in &self.channels {
+            writeln!(
+                f,
+                "  channel {:<4}{}: {} iteration{}, relative residual {}",
+                ch.name,
+                match ch.solver.kind {
+                    SolverKind::Gmres => "gmres",
+                    SolverKind::Lu => "lu",
+                },
+                ch.solver.iterations,
+                if ch.solver.iterations == 1 { "" } else { "s" },
+                sci(ch.solver.residual)
+            )?;
+            writeln!(
+                f,
+                "              ∫u = {:.12}, ∫E = {:.12}",
+                ch.integral_u, ch.integral_e
+            )?;
+            match &ch.errors {
+                Some(e) => writeln!(
+                    f,
+                    "              errors: nodes max {}, global max {}, L2 {}",
+                    sci(e.nodes_max),
+                    sci(e.global_max),
+                    sci(e.l2)
+                )?,
+                None => writeln!(
+                    f,
+                    "              errors: - (give --exact EXPR to measure them)"
+                )?,
+            }
+        }
+        Ok(())
+    }
+}
+
+impl fmt::Display for SolveReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "radcol solve: {}, r = {}, {}, level {}{}",
+            self.scene,
+            self.degree,
+            alpha_text(self.alpha, self.alpha_auto, self.degree),
+            self.level,
+            self.max_edge
+                .map(|h| format!(", max edge {h:.6}"))
+                .unwrap_or_default()
+        )?;
+        writeln!(
+            f,
+            "  mesh        {} elements, {} unknowns, h = {:.6}, shape ratio {:.4} .. {:.4}",
+            self.elements, self.unknowns, self.h, self.shape_ratio.min, self.shape_ratio.max
+        )?;
+        writeln!(
+            f,
+            "  problem     ρ = {}, E = {}, exact u = {}",
+            self.problem.rho,
+            self.problem.emission,
+            self.problem.exact.as_deref().unwrap_or("unknown")
+        )?;
+        if let Some(sc) = &self.contents {
+            writeln!(
+                f,
+                "  scene       {} triangles, {} materials, emitting: {}",
+                sc.triangles,
+                sc.materials,
+                if sc.emitters.is_empty() {
+                    "none (the solution is 0)".to_string()
+                } else {
+                    sc.emitters.join(", ")
+                }
+            )?;
+        }
+        writeln!(f, "  visibility  {}", self.visibility.reason)?;
+        writeln!(f, "  backend     {}", self.backend)?;
+        self.fmt_assembly(f)?;
+        let t = &self.timings;
+        writeln!(
+            f,
+            "  timings     mesh {}, rhs {}, assembly {}, solve {}, errors {}, total {}",
+            secs(t.mesh_s),
+            secs(t.rhs_s),
+            secs(t.assembly_s),
+            secs(t.solve_s),
+            secs(t.errors_s),
+            secs(t.total_s)
+        )?;
+        self.fmt_channels(f)?;
+        for w in &self.out {
+            writeln!(f, "  wrote {} to {} ({})", w.what, w.path, secs(w.seconds))?;
+        }
+        Ok(())
+    }
+}

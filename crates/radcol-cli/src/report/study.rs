@@ -1,0 +1,204 @@
+//! `radcol study`: a header, one line per level as it completes, and the
+//! fitted orders beside the theory's.
+
+use super::{alpha_text, ProblemText};
+use crate::setup::Setup;
+use radcol_core::assembly::BackendInfo;
+use radcol_core::run::SolverKind;
+use radcol_core::study::{fitted_order_above_rounding, PredictedOrders, StudyRow};
+use serde::Serialize;
+use std::fmt;
+
+/// What the table is of: printed before the first level is solved.
+#[derive(Clone, Debug, Serialize)]
+pub struct StudyHeader {
+    command: &'static str,
+    scene: String,
+    degree: usize,
+    alpha: f64,
+    alpha_auto: bool,
+    levels: [u32; 2],
+    problem: ProblemText,
+    solver: SolverKind,
+    backend: BackendInfo,
+}
+
+impl StudyHeader {
+    /// The header of a study of `s` over `levels`.
+    pub fn new(s: &Setup, levels: (u32, u32)) -> Self {
+        Self {
+            command: "study",
+            scene: s.scene.clone(),
+            degree: s.cfg.degree,
+            alpha: s.alpha.value,
+            alpha_auto: s.alpha.auto,
+            levels: [levels.0, levels.1],
+            problem: ProblemText::of(s),
+            solver: s.cfg.solver,
+            backend: s.backend.info(),
+        }
+    }
+
+    /// The plot's title.
+    pub fn title(&self) -> String {
+        format!(
+            "radcol study: {}, r = {}, α = {:.6}, ρ = {}, u = {}",
+            self.scene,
+            self.degree,
+            self.alpha,
+            self.problem.rho,
+            self.problem.exact.as_deref().unwrap_or("-")
+        )
+    }
+}
+
+impl fmt::Display for StudyHeader {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "radcol study: {}, r = {}, {}, ρ = {}, u = {}, E = {}, levels {}..={}, backend {}",
+            self.scene,
+            self.degree,
+            alpha_text(self.alpha, self.alpha_auto, self.degree),
+            self.problem.rho,
+            self.problem.exact.as_deref().unwrap_or("-"),
+            self.problem.emission,
+            self.levels[0],
+            self.levels[1],
+            self.backend
+        )?;
+        writeln!(
+            f,
+            "{:>5} {:>9} {:>9} {:>10} {:>10} {:>10} {:>10} {:>9} {:>10} {:>7} {:>11} {:>10}",
+            "level",
+            "elements",
+            "unknowns",
+            "h",
+            "nodes_max",
+            "global_max",
+            "l2",
+            "eoc_nodes",
+            "eoc_global",
+            "eoc_l2",
+            "assembly_s",
+            "solve_s"
+        )
+    }
+}
+
+/// One line of the table.
+#[derive(Clone, Copy, Debug)]
+pub struct StudyLine<'a>(pub &'a StudyRow);
+
+impl fmt::Display for StudyLine<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let r = self.0;
+        let eoc = |v: Option<f64>| v.map(|x| format!("{x:.3}")).unwrap_or_else(|| "-".into());
+        writeln!(
+            f,
+            "{:>5} {:>9} {:>9} {:>10.6} {:>10.3e} {:>10.3e} {:>10.3e} {:>9} {:>10} {:>7} {:>11.4} {:>10.4}",
+            r.level,
+            r.elements,
+            r.unknowns,
+            r.h,
+            r.nodes_max,
+            r.global_max,
+            r.l2,
+            eoc(r.eoc_nodes),
+            eoc(r.eoc_global),
+            eoc(r.eoc_l2),
+            r.assembly_s,
+            r.solve_s
+        )
+    }
+}
+
+/// Fitted orders (least squares over the levels whose error lies above the
+/// rounding floor) of the three norms; None with fewer than two such levels.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Fitted {
+    nodes_max: Option<f64>,
+    global_max: Option<f64>,
+    l2: Option<f64>,
+}
+
+impl Fitted {
+    /// The fitted orders of `rows`.
+    pub fn of(rows: &[StudyRow]) -> Self {
+        let fit = |e: fn(&StudyRow) -> f64| fitted_order_above_rounding(rows, e);
+        Self {
+            nodes_max: fit(|r| r.nodes_max),
+            global_max: fit(|r| r.global_max),
+            l2: fit(|r| r.l2),
+        }
+    }
+}
+
+/// The fitted orders and the theory, after the table.
+#[derive(Clone, Debug, Serialize)]
+pub struct StudyFooter {
+    fitted: Fitted,
+    theory: PredictedOrders,
+    plot: Option<String>,
+}
+
+impl StudyFooter {
+    /// The footer of `rows` with the theory's `predicted` orders and the plot written.
+    pub fn new(rows: &[StudyRow], predicted: PredictedOrders, plot: Option<String>) -> Self {
+        Self {
+            fitted: Fitted::of(rows),
+            theory: predicted,
+            plot,
+        }
+    }
+}
+
+impl fmt::Display for StudyFooter {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let v = |x: Option<f64>| x.map(|x| format!("{x:.3}")).unwrap_or_else(|| "-".into());
+        let ft = &self.fitted;
+        writeln!(
+            f,
+            "fitted orders (least squares over the levels above rounding, 1000 ε max|u_n|): nodes_max {}, global_max {}, l2 {}",
+            v(ft.nodes_max),
+            v(ft.global_max),
+            v(ft.l2)
+        )?;
+        writeln!(f, "{}", self.theory.note)?;
+        if let Some(p) = &self.plot {
+            writeln!(f, "wrote plot to {p}")?;
+        }
+        Ok(())
+    }
+}
+
+/// Everything `radcol study` reports.
+#[derive(Clone, Debug, Serialize)]
+pub struct StudyReport {
+    #[serde(flatten)]
+    header: StudyHeader,
+    rows: Vec<StudyRow>,
+    #[serde(flatten)]
+    footer: StudyFooter,
+}
+
+impl StudyReport {
+    /// The whole report.
+    pub fn new(header: StudyHeader, rows: Vec<StudyRow>, footer: StudyFooter) -> Self {
+        Self {
+            header,
+            rows,
+            footer,
+        }
+    }
+}
+
+impl fmt::Display for StudyReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.header)?;
+        for r in &self.rows {
+            write!(f, "{}", StudyLine(r))?;
+        }
+        write!(f, "{}", self.footer)
+    }
+}

@@ -1,0 +1,100 @@
+//! Layer 3: executing a validated [`Config`]. Each command builds what it
+//! needs (scene, α, problem, backend: [`crate::setup`]), calls core, and
+//! reports.
+
+mod info;
+
+use crate::error::with_flags;
+use crate::report::{
+    self, NodesReport, SolveReport, StudyFooter, StudyHeader, StudyLine, StudyReport,
+};
+use crate::setup::{self, check_writable, resolve_alpha};
+use crate::validate::{Config, NodesJob, SolveJob, StudyJob};
+use crate::{output, plot, progress};
+use anyhow::{Context, Result};
+use radcol_core::nodes::NodeSet;
+use radcol_core::run::solve;
+use radcol_core::study::{predicted_orders, Study};
+use std::io::{self, Write};
+
+/// Runs one command, printing its report to stdout.
+pub fn run(config: Config) -> Result<()> {
+    let stdout = io::stdout();
+    let mut w = stdout.lock();
+    match config {
+        Config::Solve(job) => run_solve(job, &mut w),
+        Config::Study(job) => run_study(job, &mut w),
+        Config::Nodes(job) => run_nodes(job, &mut w),
+        Config::Info(job) => info::run_info(job, &mut w),
+    }?;
+    w.flush()?;
+    Ok(())
+}
+
+fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
+    for o in &job.outputs {
+        check_writable(&o.file)?;
+    }
+    let mut s = setup::setup(&job.problem, job.level, job.max_edge)?;
+    let look = setup::look(&job.look, &s);
+    let bar = progress::Bar::for_stderr();
+    s.cfg.progress = bar.as_ref().map(|b| b.handle());
+    let out = solve(&s.problem, &s.cfg, s.backend.as_ref()).map_err(with_flags)?;
+    let written = output::write_all(&job.outputs, &look, &out, bar.as_ref())?;
+    if let Some(b) = bar {
+        b.finish();
+    }
+    report::emit(w, &SolveReport::new(&s, &out, &written), s.json)
+}
+
+fn run_study(job: StudyJob, w: &mut dyn Write) -> Result<()> {
+    if let Some(p) = &job.plot {
+        check_writable(p)?;
+    }
+    let s = setup::setup(&job.problem, Some(*job.levels.start()), None)?;
+    let checked = Study::new(&s.problem, &s.cfg, job.levels.clone()).map_err(with_flags)?;
+    let header = StudyHeader::new(&s, (*job.levels.start(), *job.levels.end()));
+    if !s.json {
+        write!(w, "{header}")?;
+        w.flush()?;
+    }
+    // Rows print as they complete; a failed write stops nothing but is reported after.
+    let mut write_error: Option<io::Error> = None;
+    let rows = checked
+        .run(s.backend.as_ref(), |row| {
+            if !s.json && write_error.is_none() {
+                if let Err(e) = write!(w, "{}", StudyLine(row)).and_then(|_| w.flush()) {
+                    write_error = Some(e);
+                }
+            }
+        })
+        .map_err(with_flags)?;
+    if let Some(e) = write_error {
+        return Err(e.into());
+    }
+    let theory = predicted_orders(s.cfg.degree, s.alpha.value, &s.alpha.a0);
+    let plot_path = match &job.plot {
+        Some(file) => {
+            let svg = plot::study_svg(&rows, &header.title());
+            let mut f = output::create(file)?;
+            f.write_all(svg.as_bytes())
+                .and_then(|_| f.flush())
+                .with_context(|| format!("writing {}", file.path.display()))?;
+            Some(file.path.display().to_string())
+        }
+        None => None,
+    };
+    let footer = StudyFooter::new(&rows, theory, plot_path);
+    if s.json {
+        report::emit(w, &StudyReport::new(header, rows, footer), true)
+    } else {
+        write!(w, "{footer}")?;
+        Ok(())
+    }
+}
+
+fn run_nodes(job: NodesJob, w: &mut dyn Write) -> Result<()> {
+    let alpha = resolve_alpha(job.alpha, job.degree);
+    let set = NodeSet::new(job.degree, alpha.value)?;
+    report::emit(w, &NodesReport::new(&set, &alpha), job.json)
+}

@@ -1,0 +1,250 @@
+//! The run step's builders: the scene loaded, α resolved, the problem (with a
+//! reference operator when E is manufactured), the solve configuration and
+//! the backend, each built when a command needs it.
+
+use crate::error::bad_input;
+use crate::scene::{Loaded, SceneSpec};
+use crate::validate::{AlphaSpec, LookSpec, OutputFile, ProblemSpec};
+use anyhow::Result;
+use radcol_core::alpha0::{find_alpha0, Alpha0Report};
+use radcol_core::assembly::AssemblyBackend;
+use radcol_core::camera::Camera;
+use radcol_core::problem::{Field, Problem, ReferenceOperator};
+use radcol_core::render::{RenderOptions, ToneMap};
+use radcol_core::run::SolveConfig;
+use radcol_gpu::select_backend;
+
+/// Refinement level of the reference mesh that manufactures E = u - K u.
+const REFERENCE_LEVEL: u32 = 2;
+
+/// Level of `radcol solve` when none is given.
+const DEFAULT_LEVEL: u32 = 2;
+
+/// Scenes with materials given neither --level nor --max-edge are refined to
+/// edges of at most this fraction of their bounding box's diagonal.
+const DEFAULT_EDGE_FRACTION: f64 = 0.1;
+
+/// The node parameter and how it was chosen.
+#[derive(Clone, Debug)]
+pub struct Alpha {
+    /// α.
+    pub value: f64,
+    /// True for `--alpha auto`.
+    pub auto: bool,
+    /// The α0 search of the degree (done once per run).
+    pub a0: Alpha0Report,
+}
+
+/// α for degree `r`: the α0 search runs once, here.
+pub fn resolve_alpha(spec: AlphaSpec, r: usize) -> Alpha {
+    let a0 = find_alpha0(r);
+    match spec {
+        AlphaSpec::Auto => Alpha {
+            value: a0.auto_alpha(),
+            auto: true,
+            a0,
+        },
+        AlphaSpec::Value(value) => Alpha {
+            value,
+            auto: false,
+            a0,
+        },
+    }
+}
+
+/// A problem, its discretization settings and a backend: what `solve` and
+/// `study` run.
+pub struct Setup {
+    /// Scene name for reports.
+    pub scene: String,
+    /// The surface, or the scene with its materials and camera.
+    pub loaded: Loaded,
+    /// The problem (surface, ρ, E, exact u).
+    pub problem: Problem,
+    /// Degree, α, level, solver and quadrature settings.
+    pub cfg: SolveConfig,
+    /// α and whether it was `auto`.
+    pub alpha: Alpha,
+    /// The assembly backend.
+    pub backend: Box<dyn AssemblyBackend>,
+    /// ρ as given, or where it comes from.
+    pub rho: String,
+    /// E as given, or how it is obtained.
+    pub emission: String,
+    /// u as given.
+    pub exact: Option<String>,
+    /// JSON instead of text.
+    pub json: bool,
+}
+
+impl std::fmt::Debug for Setup {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Setup")
+            .field("scene", &self.scene)
+            .field("cfg", &self.cfg)
+            .field("backend", &self.backend.info())
+            .finish_non_exhaustive()
+    }
+}
+
+/// Loads `spec` and prints its repair and input warnings on stderr (the
+/// report on stdout stays machine-readable).
+pub fn load(spec: &SceneSpec) -> Result<Loaded> {
+    let loaded = spec.load()?;
+    if let Some(scene) = loaded.scene() {
+        for w in &scene.warnings {
+            eprintln!("warning: {}: {w}", scene.name);
+        }
+    }
+    Ok(loaded)
+}
+
+/// The level and maximum edge to use: as given, else [`DEFAULT_LEVEL`], or for
+/// a scene with materials given neither, level 0 with edges of at most
+/// [`DEFAULT_EDGE_FRACTION`] of its bounding box's diagonal.
+pub fn default_refinement(
+    loaded: &Loaded,
+    level: Option<u32>,
+    max_edge: Option<f64>,
+) -> (u32, Option<f64>) {
+    match (level, max_edge, loaded.scene()) {
+        (None, None, Some(scene)) => {
+            let (lo, hi) = scene.bounding_box();
+            (0, Some(DEFAULT_EDGE_FRACTION * (hi - lo).length()))
+        }
+        (level, max_edge, _) => (level.unwrap_or(DEFAULT_LEVEL), max_edge),
+    }
+}
+
+/// Builds what `solve` and `study` need from `p`: the scene, α, the problem,
+/// the configuration at `level` (None: the default refinement) and the backend.
+pub fn setup(p: &ProblemSpec, level: Option<u32>, max_edge: Option<f64>) -> Result<Setup> {
+    let loaded = load(&p.scene)?;
+    let surface = loaded.surface().clone();
+    let (level, max_edge) = default_refinement(&loaded, level, max_edge);
+    let alpha = resolve_alpha(p.alpha, p.degree);
+    let backend = select_backend(p.backend, p.precision).map_err(|e| {
+        bad_input(format!(
+            "--backend {}: {e} (--backend cpu needs no device)",
+            p.backend
+        ))
+    })?;
+    let (rho_text, emission_text) = match (&loaded, &p.emission, &p.exact) {
+        (Loaded::Scene(_), _, _) => (
+            "Kd of the materials (R, G, B)".to_string(),
+            "Ke of the materials (R, G, B)".to_string(),
+        ),
+        (_, Some((e, _)), _) => (p.rho.0.clone(), e.clone()),
+        (_, None, Some(_)) => (p.rho.0.clone(), "manufactured: u - K u".to_string()),
+        (_, None, None) => (p.rho.0.clone(), "1".to_string()),
+    };
+    let rho = p.rho.1.clone();
+    let problem = match (&p.emission, &p.exact) {
+        _ if loaded.scene().is_some() => loaded.scene().expect("checked").problem(),
+        (None, Some((_, u))) => Problem::manufactured(
+            surface.clone(),
+            rho,
+            u.clone(),
+            ReferenceOperator::new(surface.clone(), REFERENCE_LEVEL),
+        ),
+        (e, u) => {
+            let e = e.as_ref().map(|(_, f)| f.clone());
+            let mut problem = Problem::new(surface.clone(), rho, e.unwrap_or(Field::Constant(1.0)));
+            problem.exact = u.as_ref().map(|(_, f)| f.clone());
+            problem
+        }
+    };
+    let cfg = SolveConfig {
+        degree: p.degree,
+        alpha: alpha.value,
+        level,
+        solver: p.solver,
+        gmres: p.gmres.clone(),
+        quad: p.quad.clone(),
+        check_memory: true,
+        max_edge,
+        progress: None,
+    };
+    Ok(Setup {
+        scene: surface.name.clone(),
+        loaded,
+        problem,
+        cfg,
+        alpha,
+        backend,
+        rho: rho_text,
+        emission: emission_text,
+        exact: p.exact.as_ref().map(|(t, _)| t.clone()),
+        json: p.json,
+    })
+}
+
+/// Camera, image and tone-mapping settings for the outputs people look at.
+#[derive(Clone, Debug)]
+pub struct Look {
+    /// The camera of the images: --camera, else the scene's, else chosen from
+    /// the solved mesh ([`radcol_core::render::auto_camera`]).
+    pub camera: Option<Camera>,
+    /// Image size and sampling.
+    pub render: RenderOptions,
+    /// Exposure and tone curve of 8-bit outputs.
+    pub tone: ToneMap,
+    /// Triangles per element edge of vertex meshes.
+    pub tessellation: u32,
+}
+
+/// The look of `spec` for the scene and degree of `s`.
+pub fn look(spec: &LookSpec, s: &Setup) -> Look {
+    Look {
+        camera: spec
+            .camera
+            .or_else(|| s.loaded.scene().and_then(|sc| sc.camera)),
+        render: spec.render,
+        tone: spec.tone,
+        tessellation: spec.tessellation.unwrap_or(s.cfg.degree.max(1) as u32),
+    }
+}
+
+/// Checks, before any work, that `file` may be written: not a directory, an
+/// existing parent directory, and no existing file unless `--force`.
+pub fn check_writable(file: &OutputFile) -> Result<(), crate::error::BadInput> {
+    let (flag, path) = (file.flag, &file.path);
+    let shown = path.display();
+    if path.is_dir() {
+        return Err(bad_input(format!("{flag} {shown} is a directory")));
+    }
+    if path.exists() && !file.force {
+        return Err(bad_input(format!(
+            "{flag} {shown} already exists; pass --force to overwrite it"
+        )));
+    }
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        if !parent.is_dir() {
+            return Err(bad_input(format!(
+                "{flag} {shown}: directory {} does not exist",
+                parent.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use radcol_core::assembly::Scalar;
+    use radcol_gpu::{BackendChoice, Precision};
+
+    #[test]
+    fn auto_alpha_is_alpha0_for_odd_degree() {
+        radcol_core::assert_close!(resolve_alpha(AlphaSpec::Auto, 1).value, 1.0 / 6.0, 1e-15);
+        assert_eq!(resolve_alpha(AlphaSpec::Value(0.1), 2).value, 0.1);
+    }
+
+    #[test]
+    fn cpu_backend_is_f64_only() {
+        let cpu = select_backend(BackendChoice::Cpu, Precision::Auto).unwrap();
+        assert_eq!(cpu.info().precision, Scalar::F64);
+        assert!(select_backend(BackendChoice::Cpu, Precision::F32).is_err());
+    }
+}

@@ -1,0 +1,387 @@
+//! Layer 2: arguments -> validated values. Parsing only: no file is read, no
+//! device opened, no number computed beyond parsing. Every value that can be
+//! rejected from its text alone is rejected here, with the flag's name.
+
+mod outputs;
+
+pub use outputs::{LookSpec, Output, OutputFile, OutputKind};
+
+use crate::args::{
+    BackendArg, Cli, Command, InfoArgs, NodesArgs, PrecisionArg, ProblemArgs, SolveArgs, SolverArg,
+    StudyArgs, VisibilityArg,
+};
+use crate::error::{bad_input, BadInput};
+use crate::scene::SceneSpec;
+use anyhow::{Context, Result};
+use outputs::{look, output, svg_file};
+use radcol_core::assembly::{QuadratureOptions, VisibilityMode};
+use radcol_core::nodes::{check_alpha, check_degree};
+use radcol_core::problem::Field;
+use radcol_core::run::SolverKind;
+use radcol_core::solve::GmresParams;
+use radcol_gpu::{BackendChoice, Precision};
+use std::ops::RangeInclusive;
+
+/// A validated command.
+#[derive(Debug)]
+pub enum Config {
+    /// `radcol solve`.
+    Solve(SolveJob),
+    /// `radcol study`.
+    Study(StudyJob),
+    /// `radcol nodes`.
+    Nodes(NodesJob),
+    /// `radcol info`.
+    Info(InfoJob),
+}
+
+/// The node parameter as asked for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlphaSpec {
+    /// `--alpha auto`: α0 when it exists, else the defect minimiser.
+    Auto,
+    /// A number in (0, 1/3).
+    Value(f64),
+}
+
+/// The problem and discretization settings `solve` and `study` share.
+#[derive(Debug)]
+pub struct ProblemSpec {
+    /// The scene as given (not loaded yet).
+    pub scene: SceneSpec,
+    /// Degree r (0..=6).
+    pub degree: usize,
+    /// α.
+    pub alpha: AlphaSpec,
+    /// ρ as given (default "0.5") and parsed.
+    pub rho: (String, Field),
+    /// E as given and parsed.
+    pub emission: Option<(String, Field)>,
+    /// u as given and parsed.
+    pub exact: Option<(String, Field)>,
+    /// Linear solver.
+    pub solver: SolverKind,
+    /// GMRES settings.
+    pub gmres: GmresParams,
+    /// Quadrature accuracy and visibility mode.
+    pub quad: QuadratureOptions,
+    /// Which backend.
+    pub backend: BackendChoice,
+    /// Device precision.
+    pub precision: Precision,
+    /// JSON instead of text.
+    pub json: bool,
+}
+
+/// `radcol solve`.
+#[derive(Debug)]
+pub struct SolveJob {
+    /// Problem and settings.
+    pub problem: ProblemSpec,
+    /// Refinement level; None: the default refinement.
+    pub level: Option<u32>,
+    /// Maximum edge length after the uniform level.
+    pub max_edge: Option<f64>,
+    /// Files to write, in the order given.
+    pub outputs: Vec<Output>,
+    /// How images and vertex meshes are made.
+    pub look: LookSpec,
+}
+
+/// `radcol study`.
+#[derive(Debug)]
+pub struct StudyJob {
+    /// Problem and settings.
+    pub problem: ProblemSpec,
+    /// Levels A..=B.
+    pub levels: RangeInclusive<u32>,
+    /// SVG plot file.
+    pub plot: Option<OutputFile>,
+}
+
+/// `radcol nodes`.
+#[derive(Debug)]
+pub struct NodesJob {
+    /// Degree r.
+    pub degree: usize,
+    /// α.
+    pub alpha: AlphaSpec,
+    /// JSON instead of text.
+    pub json: bool,
+}
+
+/// `radcol info`.
+#[derive(Debug)]
+pub struct InfoJob {
+    /// The scene as given.
+    pub scene: SceneSpec,
+    /// Maximum edge length after uniform refinement.
+    pub max_edge: Option<f64>,
+    /// Degree r (for unknowns and memory).
+    pub degree: usize,
+    /// Refinement level; None: the default refinement.
+    pub level: Option<u32>,
+    /// JSON instead of text.
+    pub json: bool,
+}
+
+impl Config {
+    /// Validates `cli` into a configuration.
+    pub fn from_cli(cli: Cli) -> Result<Self> {
+        Ok(match cli.command {
+            Command::Solve(a) => Config::Solve(solve_job(a)?),
+            Command::Study(a) => Config::Study(study_job(a)?),
+            Command::Nodes(a) => Config::Nodes(nodes_job(a)?),
+            Command::Info(a) => Config::Info(info_job(a)?),
+        })
+    }
+}
+
+fn solve_job(a: SolveArgs) -> Result<SolveJob> {
+    let mut outputs: Vec<Output> = Vec::new();
+    for p in &a.out {
+        let output = output(p, a.problem.force)?;
+        if outputs.iter().any(|o| o.file.path == output.file.path) {
+            return Err(bad_input(format!("--out {} is given twice", p.display())).into());
+        }
+        outputs.push(output);
+    }
+    let max_edge = a.max_edge.map(check_max_edge).transpose()?;
+    let problem = problem(&a.problem)?;
+    let look = look(&a)?;
+    Ok(SolveJob {
+        problem,
+        level: a.level,
+        max_edge,
+        outputs,
+        look,
+    })
+}
+
+fn check_max_edge(h: f64) -> Result<f64, BadInput> {
+    if !(h.is_finite() && h > 0.0) {
+        return Err(bad_input(format!(
+            "--max-edge {h}: the maximum edge length must be a positive finite number (scene units)"
+        )));
+    }
+    Ok(h)
+}
+
+fn study_job(a: StudyArgs) -> Result<StudyJob> {
+    let levels = parse_levels(&a.levels)?;
+    let problem = problem(&a.problem)?;
+    if problem.exact.is_none() {
+        return Err(bad_input(
+            "a study measures errors against the exact solution: give --exact EXPR \
+             (E is then manufactured as u - K u unless --emission is given)",
+        )
+        .into());
+    }
+    let plot = a
+        .plot
+        .as_deref()
+        .map(|p| svg_file(p, a.problem.force))
+        .transpose()?;
+    Ok(StudyJob {
+        problem,
+        levels,
+        plot,
+    })
+}
+
+fn nodes_job(a: NodesArgs) -> Result<NodesJob> {
+    let degree = degree(a.degree)?;
+    let alpha = parse_alpha(&a.alpha)?;
+    Ok(NodesJob {
+        degree,
+        alpha,
+        json: a.json,
+    })
+}
+
+fn info_job(a: InfoArgs) -> Result<InfoJob> {
+    let scene = SceneSpec::parse(&a.scene)?;
+    let degree = degree(a.degree)?;
+    let max_edge = a.max_edge.map(check_max_edge).transpose()?;
+    Ok(InfoJob {
+        scene,
+        max_edge,
+        degree,
+        level: a.level,
+        json: a.json,
+    })
+}
+
+/// The shared options of `solve` and `study`.
+fn problem(p: &ProblemArgs) -> Result<ProblemSpec> {
+    let scene = SceneSpec::parse(&p.scene)?;
+    if scene.has_materials() {
+        for (flag, given) in [
+            ("--rho", p.rho.is_some()),
+            ("--emission", p.emission.is_some()),
+            ("--exact", p.exact.is_some()),
+        ] {
+            if given {
+                return Err(bad_input(format!(
+                    "{flag}: scene '{}' takes ρ and E from its materials (Kd, Ke) and has no known \
+                     exact solution; {flag} applies to the analytic surfaces (sphere, ellipsoid, box)",
+                    p.scene.trim()
+                ))
+                .into());
+            }
+        }
+    }
+    let degree = degree(p.degree)?;
+    let alpha = parse_alpha(&p.alpha)?;
+    let tol = open_unit("--tol", p.tol)?;
+    let quad_tol = open_unit("--quad-tol", p.quad_tol)?;
+    if p.restart == 0 {
+        return Err(bad_input("--restart must be at least 1").into());
+    }
+    if p.max_iters == 0 {
+        return Err(bad_input("--max-iters must be at least 1").into());
+    }
+    let field = |flag: &'static str, text: &str| -> Result<(String, Field)> {
+        Ok((text.to_string(), Field::parse(text).context(flag)?))
+    };
+    let backend = match p.backend {
+        BackendArg::Cpu => BackendChoice::Cpu,
+        BackendArg::Gpu => BackendChoice::Gpu,
+        BackendArg::Auto => BackendChoice::Auto,
+    };
+    let precision = match p.precision {
+        PrecisionArg::Auto => Precision::Auto,
+        PrecisionArg::F64 => Precision::F64,
+        PrecisionArg::F32 => Precision::F32,
+    };
+    if backend == BackendChoice::Cpu && precision == Precision::F32 {
+        return Err(bad_input(
+            "the CPU backend computes in f64 only; --precision f32 needs --backend gpu",
+        )
+        .into());
+    }
+    Ok(ProblemSpec {
+        scene,
+        degree,
+        alpha,
+        rho: field("--rho", p.rho.as_deref().unwrap_or("0.5"))?,
+        emission: p
+            .emission
+            .as_deref()
+            .map(|e| field("--emission", e))
+            .transpose()?,
+        exact: p
+            .exact
+            .as_deref()
+            .map(|e| field("--exact", e))
+            .transpose()?,
+        solver: match p.solver {
+            SolverArg::Gmres => SolverKind::Gmres,
+            SolverArg::Lu => SolverKind::Lu,
+        },
+        gmres: GmresParams {
+            rel_tol: tol,
+            restart: p.restart,
+            max_iters: p.max_iters,
+        },
+        quad: QuadratureOptions {
+            tol: quad_tol,
+            visibility: match p.visibility {
+                VisibilityArg::Clip => VisibilityMode::Clip,
+                VisibilityArg::Rays => VisibilityMode::Rays,
+            },
+            ..QuadratureOptions::default()
+        },
+        backend,
+        precision,
+        json: p.json,
+    })
+}
+
+/// `--degree R` in 0..=6 (the range is core's).
+fn degree(r: usize) -> Result<usize, BadInput> {
+    check_degree(r).map_err(|e| bad_input(format!("--degree {r}: {e}")))
+}
+
+/// `auto` or a number in (0, 1/3).
+pub fn parse_alpha(text: &str) -> Result<AlphaSpec, BadInput> {
+    let text = text.trim();
+    if text.eq_ignore_ascii_case("auto") {
+        return Ok(AlphaSpec::Auto);
+    }
+    let value: f64 = text
+        .parse()
+        .map_err(|_| bad_input(format!("--alpha '{text}' is neither a number nor 'auto'")))?;
+    check_alpha(value).map_err(|e| bad_input(format!("--alpha {text}: {e}")))?;
+    Ok(AlphaSpec::Value(value))
+}
+
+fn open_unit(name: &str, v: f64) -> Result<f64, BadInput> {
+    if !(v > 0.0 && v < 1.0) {
+        return Err(bad_input(format!(
+            "{name} {v}: must lie strictly between 0 and 1"
+        )));
+    }
+    Ok(v)
+}
+
+/// `A..B` or `A..=B`, both inclusive, A <= B.
+pub fn parse_levels(text: &str) -> Result<RangeInclusive<u32>, BadInput> {
+    let t = text.trim();
+    let (a, b) = t
+        .split_once("..=")
+        .or_else(|| t.split_once(".."))
+        .ok_or_else(|| {
+            bad_input(format!(
+                "--levels '{t}': expected A..B (inclusive), e.g. 0..3"
+            ))
+        })?;
+    let level = |s: &str| {
+        s.trim().parse::<u32>().map_err(|_| {
+            bad_input(format!(
+                "--levels '{t}': '{}' is not a level (a whole number >= 0); expected A..B, e.g. 0..3",
+                s.trim()
+            ))
+        })
+    };
+    let (a, b) = (level(a)?, level(b)?);
+    if a > b {
+        return Err(bad_input(format!(
+            "--levels '{t}': the first level {a} is greater than the last {b}"
+        )));
+    }
+    Ok(a..=b)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn levels_accept_both_range_forms() {
+        assert_eq!(parse_levels("0..3").unwrap(), 0..=3);
+        assert_eq!(parse_levels(" 1..=2 ").unwrap(), 1..=2);
+        assert_eq!(parse_levels("2..2").unwrap(), 2..=2);
+    }
+
+    #[test]
+    fn levels_reject_bad_ranges() {
+        assert!(parse_levels("3..1").unwrap_err().0.contains("greater"));
+        assert!(parse_levels("a..2")
+            .unwrap_err()
+            .0
+            .contains("'a' is not a level"));
+        assert!(parse_levels("2").unwrap_err().0.contains("expected A..B"));
+        assert!(parse_levels("-1..2").is_err());
+    }
+
+    #[test]
+    fn alpha_is_auto_or_inside_the_open_interval() {
+        assert_eq!(parse_alpha("auto").unwrap(), AlphaSpec::Auto);
+        assert_eq!(parse_alpha("0.1").unwrap(), AlphaSpec::Value(0.1));
+        assert!(parse_alpha("0.4").is_err());
+        assert!(parse_alpha("0").is_err());
+        assert!(parse_alpha("nan").is_err());
+        assert!(parse_alpha("x").is_err());
+    }
+}

@@ -1,0 +1,189 @@
+//! Output files and the look of images, as given: kinds by extension,
+//! camera, image size, exposure, tone curve and tessellation.
+
+use crate::args::{SolveArgs, TonemapArg};
+use crate::error::{bad_input, BadInput};
+use radcol_core::camera::Camera;
+use radcol_core::render::{RenderOptions, ToneMap, ToneOperator};
+use std::path::{Path, PathBuf};
+
+/// The kinds of file `--out` writes, by extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutputKind {
+    /// Nodal values, one row per collocation node.
+    Csv,
+    /// Binary PLY vertex mesh.
+    Ply,
+    /// Binary glTF.
+    Glb,
+    /// glTF JSON with the buffer embedded.
+    Gltf,
+    /// Tone-mapped 8-bit image.
+    Png,
+    /// Linear radiance image.
+    Exr,
+}
+
+impl OutputKind {
+    /// Every kind with its extension.
+    pub const ALL: [(OutputKind, &'static str); 6] = [
+        (OutputKind::Csv, "csv"),
+        (OutputKind::Ply, "ply"),
+        (OutputKind::Glb, "glb"),
+        (OutputKind::Gltf, "gltf"),
+        (OutputKind::Png, "png"),
+        (OutputKind::Exr, "exr"),
+    ];
+
+    /// True for the rendered images.
+    pub fn is_image(self) -> bool {
+        matches!(self, OutputKind::Png | OutputKind::Exr)
+    }
+}
+
+/// One `--out` file.
+#[derive(Clone, Debug)]
+pub struct Output {
+    /// What to write.
+    pub kind: OutputKind,
+    /// Where.
+    pub file: OutputFile,
+}
+
+/// An output file with an accepted extension; whether it may be written
+/// (parent exists, not in the way) is checked by the run step before work.
+#[derive(Clone, Debug)]
+pub struct OutputFile {
+    /// Where.
+    pub path: PathBuf,
+    /// Overwrite if it exists.
+    pub force: bool,
+    /// The flag that named it, for messages.
+    pub flag: &'static str,
+}
+
+/// Camera, image and tone-mapping settings as given.
+#[derive(Clone, Debug)]
+pub struct LookSpec {
+    /// --camera, when given.
+    pub camera: Option<Camera>,
+    /// Image size and sampling.
+    pub render: RenderOptions,
+    /// Exposure and tone curve of 8-bit outputs.
+    pub tone: ToneMap,
+    /// Triangles per element edge of vertex meshes; None: max(r, 1).
+    pub tessellation: Option<u32>,
+}
+
+/// An `--out` path: its kind from the extension.
+pub(super) fn output(path: &Path, force: bool) -> Result<Output, BadInput> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    let Some(&(kind, _)) = OutputKind::ALL.iter().find(|(_, e)| *e == ext) else {
+        return Err(bad_input(format!(
+            "--out {}: unknown file type; the name must end in .csv, .ply, .glb, .gltf, .png or .exr",
+            path.display()
+        )));
+    };
+    let file = OutputFile {
+        path: path.to_path_buf(),
+        force,
+        flag: "--out",
+    };
+    Ok(Output { kind, file })
+}
+
+/// Camera, image size, exposure and tessellation; checked even when no image
+/// is asked for, so that a typo never waits for a solve.
+pub(super) fn look(a: &SolveArgs) -> Result<LookSpec, BadInput> {
+    let camera = a
+        .camera
+        .as_deref()
+        .map(|text| Camera::parse(text).map_err(|e| bad_input(format!("--camera: {e}"))))
+        .transpose()?;
+    for (flag, v) in [
+        ("--width", a.width),
+        ("--height", a.height),
+        ("--samples", a.samples),
+    ] {
+        if v == 0 {
+            return Err(bad_input(format!("{flag} must be at least 1")));
+        }
+    }
+    let pixels = a.width as u64 * a.height as u64 * (a.samples as u64).pow(2);
+    if pixels > 1 << 30 {
+        return Err(bad_input(format!(
+            "--width {} --height {} --samples {}: {pixels} rays is more than radcol renders (2^30)",
+            a.width, a.height, a.samples
+        )));
+    }
+    if let Some(t) = a.tessellation.filter(|t| !(1..=64).contains(t)) {
+        return Err(bad_input(format!("--tessellation {t}: must lie in 1..=64")));
+    }
+    Ok(LookSpec {
+        camera,
+        render: RenderOptions {
+            width: a.width,
+            height: a.height,
+            samples: a.samples,
+            ..RenderOptions::default()
+        },
+        tone: ToneMap {
+            operator: match a.tonemap {
+                TonemapArg::Aces => ToneOperator::Aces,
+                TonemapArg::Reinhard => ToneOperator::Reinhard,
+                TonemapArg::Linear => ToneOperator::Linear,
+            },
+            ..parse_exposure(&a.exposure)?
+        },
+        tessellation: a.tessellation,
+    })
+}
+
+/// `auto`, `auto+S`, `auto-S` or a number of stops S.
+pub fn parse_exposure(text: &str) -> Result<ToneMap, BadInput> {
+    let t = text.trim();
+    let lower = t.to_ascii_lowercase();
+    let (auto, stops) = match lower.strip_prefix("auto") {
+        Some("") => (true, "0"),
+        Some(rest) => (true, rest.strip_prefix('+').unwrap_or(rest)),
+        None => (false, t),
+    };
+    let exposure: f64 = stops
+        .trim()
+        .parse()
+        .ok()
+        .filter(|v: &f64| v.is_finite())
+        .ok_or_else(|| {
+            bad_input(format!(
+                "--exposure '{t}': expected auto, auto+S, auto-S or a number of stops S"
+            ))
+        })?;
+    Ok(ToneMap {
+        exposure,
+        auto,
+        ..ToneMap::default()
+    })
+}
+
+/// A `--plot` path: only SVG.
+pub(super) fn svg_file(path: &Path, force: bool) -> Result<OutputFile, BadInput> {
+    let ok = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
+    if !ok {
+        return Err(bad_input(format!(
+            "--plot {}: only .svg plots for now (the file name must end in .svg)",
+            path.display()
+        )));
+    }
+    Ok(OutputFile {
+        path: path.to_path_buf(),
+        force,
+        flag: "--plot",
+    })
+}

@@ -1,0 +1,241 @@
+//! Executing the plan: filling one row block of the geometric matrix, and
+//! integrating a partly visible pair over its clipped visible region.
+
+use super::kernels::{contract, far_kernel_row, RUN_CHUNK};
+use super::{AssemblyPlan, FillMode, PairClass};
+use crate::assembly::integrate::{ElementIntegrator, FieldPoint, Integrand};
+use crate::assembly::VisibilityMode;
+use crate::discretization::CollocationPoint;
+use crate::visibility::clip;
+use glam::DVec3;
+
+/// What every run of one row block shares.
+struct BlockFill<'a, 'i> {
+    plan: &'a AssemblyPlan,
+    kp: usize,
+    pts: &'a [CollocationPoint],
+    integrator: &'a ElementIntegrator<'i>,
+    phi: &'a Integrand<'a>,
+    f: usize,
+    ncols: usize,
+}
+
+impl AssemblyPlan {
+    /// Integrates the basis times G over the part of element `k` visible from
+    /// the point (`position`, `normal`) of element `kp`, for a pair classed
+    /// [`PairClass::Partial`]: the visible region is clipped exactly
+    /// ([`clip::visible_region`]) and each convex piece integrated adaptively.
+    /// Overwrites `out` (f_r values); returns kernel evaluations.
+    ///
+    /// # Panics
+    /// When the pair is not partial.
+    #[allow(clippy::too_many_arguments)]
+    pub fn integrate_partial(
+        &self,
+        integrator: &ElementIntegrator<'_>,
+        position: DVec3,
+        normal: DVec3,
+        kp: usize,
+        k: usize,
+        phi: &Integrand<'_>,
+        out: &mut [f64],
+    ) -> u64 {
+        let occ = self
+            .occluders
+            .as_ref()
+            .expect("partial pairs exist only with occluders");
+        let cands = self.partial[kp].candidates_of(k);
+        let verts = self.disc.mesh().vertices(k);
+        let r = self.disc.nodes().degree();
+        let fp = FieldPoint {
+            position,
+            normal,
+            on_element: None,
+        };
+        out.fill(0.0);
+        if self.opts.visibility == VisibilityMode::Rays {
+            let seen = |k: usize, st: [f64; 2], q: DVec3, out: &mut [f64]| {
+                if cands.iter().any(|&i| clip::blocks(position, q, occ.get(i))) {
+                    out.fill(0.0);
+                } else {
+                    phi(k, st, q, out);
+                }
+            };
+            let whole = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+            return integrator.integrate_region(&fp, k, whole, r, &seen, out);
+        }
+        let mut evals = 0;
+        for piece in clip::visible_region(position, normal, &verts, occ, cands) {
+            for tri in clip::triangles(&piece) {
+                evals += integrator.integrate_region(&fp, k, tri, r, phi, out);
+            }
+        }
+        evals
+    }
+
+    /// Fills the row block of element `kp`: `block` holds its f_r rows of the
+    /// geometric matrix (length f_r · N, row-major). Returns kernel evaluations.
+    pub fn fill_block(&self, kp: usize, block: &mut [f64], mode: FillMode) -> u64 {
+        let n = self.disc.mesh().len();
+        let f = self.disc.nodes_per_element();
+        let ncols = n * f;
+        debug_assert_eq!(block.len(), f * ncols);
+        let classes = &self.classes[kp * n..(kp + 1) * n];
+        let integrator = self.integrator();
+        let nodes = self.disc.nodes();
+        let phi = |_k: usize, st: [f64; 2], _q: DVec3, out: &mut [f64]| {
+            nodes.eval_basis(st[0], st[1], out)
+        };
+        let fill = BlockFill {
+            plan: self,
+            kp,
+            pts: &self.disc.points()[kp * f..(kp + 1) * f],
+            integrator: &integrator,
+            phi: &phi,
+            f,
+            ncols,
+        };
+        let max_nq = self
+            .tables
+            .iter()
+            .flatten()
+            .map(|t| t.nq)
+            .max()
+            .unwrap_or(0);
+        let mut g = vec![0.0f64; RUN_CHUNK * max_nq];
+        let mut evals = 0u64;
+        let mut k = 0;
+        while k < n {
+            // A run of consecutive elements with one class: refinement numbers
+            // children consecutively, so neighbours in space share a rule and
+            // their rule points are contiguous in the far table.
+            let class = classes[k];
+            let mut end = k + 1;
+            while end < n && end - k < RUN_CHUNK && classes[end] == class {
+                end += 1;
+            }
+            evals += fill.run(PairClass::from_code(class), k..end, block, mode, &mut g);
+            k = end;
+        }
+        if mode != FillMode::FarOnly {
+            if let Some(p) = &self.progress {
+                p.advance(1);
+            }
+        }
+        evals
+    }
+}
+
+impl BlockFill<'_, '_> {
+    /// Fills the columns of elements `run` (one class) in every row of the
+    /// block, as far as `mode` asks. Returns kernel evaluations.
+    #[inline]
+    fn run(
+        &self,
+        class: PairClass,
+        run: std::ops::Range<usize>,
+        block: &mut [f64],
+        mode: FillMode,
+        g: &mut [f64],
+    ) -> u64 {
+        let (f, ncols) = (self.f, self.ncols);
+        match class {
+            PairClass::Culled if mode == FillMode::All => {
+                for row in 0..f {
+                    block[row * ncols + run.start * f..row * ncols + run.end * f].fill(0.0);
+                }
+                0
+            }
+            PairClass::Culled => 0,
+            PairClass::Near | PairClass::OnElement if mode != FillMode::FarOnly => {
+                self.adaptive(run, block)
+            }
+            PairClass::Partial if mode != FillMode::FarOnly => self.partial(run, block),
+            PairClass::Far(d) if mode != FillMode::SpecialOnly => self.far(d, run, block, g),
+            _ => 0,
+        }
+    }
+
+    /// The output slot of element `ke` in row `row` of the block.
+    #[inline]
+    fn slot<'b>(&self, block: &'b mut [f64], row: usize, ke: usize) -> &'b mut [f64] {
+        let (f, ncols) = (self.f, self.ncols);
+        &mut block[row * ncols + ke * f..row * ncols + (ke + 1) * f]
+    }
+
+    /// Near and on-element pairs: adaptive subdivision or the split-at-P rule.
+    fn adaptive(&self, run: std::ops::Range<usize>, block: &mut [f64]) -> u64 {
+        let r = self.plan.disc.nodes().degree();
+        let mut evals = 0;
+        for ke in run {
+            for (row, p) in self.pts.iter().enumerate() {
+                let out = self.slot(block, row, ke);
+                out.fill(0.0);
+                let fp = FieldPoint {
+                    position: p.position,
+                    normal: p.normal,
+                    on_element: Some((self.kp, p.st)),
+                };
+                evals += self.integrator.integrate(&fp, ke, r, self.phi, out);
+            }
+        }
+        evals
+    }
+
+    /// Partly visible pairs: over the clipped visible region, row by row.
+    fn partial(&self, run: std::ops::Range<usize>, block: &mut [f64]) -> u64 {
+        let mut evals = 0;
+        for ke in run {
+            for (row, p) in self.pts.iter().enumerate() {
+                let out = self.slot(block, row, ke);
+                evals += self.plan.integrate_partial(
+                    self.integrator,
+                    p.position,
+                    p.normal,
+                    self.kp,
+                    ke,
+                    self.phi,
+                    out,
+                );
+            }
+        }
+        evals
+    }
+
+    /// Far pairs: one vectorised kernel loop over the run's rule points, then
+    /// the contraction with the basis, per row.
+    #[inline]
+    fn far(
+        &self,
+        degree: u8,
+        run: std::ops::Range<usize>,
+        block: &mut [f64],
+        g: &mut [f64],
+    ) -> u64 {
+        let (f, ncols) = (self.f, self.ncols);
+        let t = self.plan.tables[degree as usize]
+            .as_ref()
+            .expect("plan builds every table it uses");
+        let nq = t.nq;
+        let span = run.start * nq..run.end * nq;
+        let len = span.len();
+        let g = &mut g[..len];
+        for (row, p) in self.pts.iter().enumerate() {
+            far_kernel_row(
+                p.position,
+                p.normal,
+                &t.px[span.clone()],
+                &t.py[span.clone()],
+                &t.pz[span.clone()],
+                &t.nx[span.clone()],
+                &t.ny[span.clone()],
+                &t.nz[span.clone()],
+                &t.wj[span.clone()],
+                g,
+            );
+            let out = &mut block[row * ncols + run.start * f..row * ncols + run.end * f];
+            contract(g, &t.basis_t, nq, f, out);
+        }
+        (f * len) as u64
+    }
+}

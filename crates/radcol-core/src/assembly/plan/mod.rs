@@ -1,0 +1,269 @@
+//! The assembly plan: for every (element of the collocation point, element
+//! integrated over) pair, which regime and which rule. Computed once, executed
+//! by any [`AssemblyBackend`](super::AssemblyBackend); CPU and GPU read the same
+//! classes and the same far-rule tables, so they agree to rounding.
+//!
+//! The f_r collocation points of one element form a *row block* and share a
+//! class with each element: far pairs are judged from the block's nearest point,
+//! so one rule serves all f_r rows and the element's quadrature data is loaded
+//! once per block (it stays in L1 while the f_r rows are filled).
+//!
+//! By phase: [`classify`] (pair classes), the occlusion walk
+//! ([`crate::visibility`]), [`tables`] (far-rule data), [`execute`] (filling a
+//! row block) and [`kernels`] (the vectorised far loop).
+
+mod classify;
+mod execute;
+mod kernels;
+mod tables;
+
+pub use classify::PairClass;
+pub use kernels::far_kernel_row;
+pub use tables::FarTable;
+
+use super::integrate::{ElementIntegrator, QuadratureOptions, SelfRules};
+use crate::discretization::Discretization;
+use crate::progress::ProgressHandle;
+use crate::quadrature::{RuleLadder, MAX_RULE_DEGREE};
+use crate::visibility::walk::{partial_pairs, PartialRow, RefinementTree};
+use crate::visibility::{self, Occluders, VisibilityAnalysis};
+use classify::ElementShapes;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::sync::Arc;
+
+/// Pair counts (collocation point × element) and far kernel evaluations.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct PlanStats {
+    /// Pairs integrated with one far rule.
+    pub pairs_far: u64,
+    /// Pairs integrated adaptively.
+    pub pairs_near: u64,
+    /// Pairs whose collocation point lies on the element (curved surfaces).
+    pub pairs_self: u64,
+    /// Pairs with G ≡ 0 (coplanar, back-facing), not integrated.
+    pub pairs_culled: u64,
+    /// Pairs integrated over their clipped visible part (scenes that occlude).
+    pub pairs_partial: u64,
+    /// Kernel evaluations of the far pairs: Σ rule points.
+    pub far_kernel_evals: u64,
+}
+
+/// Which parts of a row block to fill.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FillMode {
+    /// Every entry.
+    All,
+    /// Only partial, near and self pairs (what a GPU backend leaves to the CPU).
+    SpecialOnly,
+    /// Only far pairs (for throughput measurements of the far-field kernel).
+    FarOnly,
+}
+
+/// The assembly plan of one discretization.
+#[derive(Debug)]
+pub struct AssemblyPlan {
+    disc: Arc<Discretization>,
+    opts: QuadratureOptions,
+    ladder: RuleLadder,
+    self_rule: Arc<SelfRules>,
+    classes: Vec<u8>,
+    tables: Vec<Option<FarTable>>,
+    stats: PlanStats,
+    visibility: VisibilityAnalysis,
+    occluders: Option<Occluders>,
+    partial: Vec<PartialRow>,
+    progress: Option<ProgressHandle>,
+}
+
+impl AssemblyPlan {
+    /// Classifies every pair and builds the far-rule tables that are used.
+    /// `visibility` is the surface's analysis ([`visibility::analyze`]): when
+    /// it says visibility is needed, partly visible pairs are found and
+    /// integrated over their clipped visible parts.
+    pub fn new(
+        disc: Arc<Discretization>,
+        opts: QuadratureOptions,
+        visibility: &VisibilityAnalysis,
+    ) -> Self {
+        Self::with_progress(disc, opts, visibility, None)
+    }
+
+    /// [`AssemblyPlan::new`], reporting each classified row block to
+    /// `progress` (stage "plan"), and then each filled row block (stage
+    /// "assembly" is started by the caller, as [`crate::run::solve`] does).
+    pub fn with_progress(
+        disc: Arc<Discretization>,
+        opts: QuadratureOptions,
+        visibility: &VisibilityAnalysis,
+        progress: Option<ProgressHandle>,
+    ) -> Self {
+        if let Some(p) = &progress {
+            p.start("plan", disc.mesh().len() as u64);
+        }
+        let occluders = visibility
+            .needed
+            .then(|| Occluders::new(&visibility::base_triangles(disc.mesh().surface())));
+        let (classes, partial) = classify_all(&disc, opts.tol, occluders.as_ref(), &progress);
+        let ladder = RuleLadder::new();
+        let (stats, used) = count(&classes, disc.nodes_per_element(), &ladder);
+        let tables = (0..=MAX_RULE_DEGREE)
+            .map(|d| used[d].then(|| tables::build_table(&disc, &ladder, d)))
+            .collect();
+        Self {
+            self_rule: Arc::new(SelfRules::new(opts.self_order)),
+            disc,
+            opts,
+            ladder,
+            classes,
+            tables,
+            stats,
+            visibility: visibility.clone(),
+            occluders,
+            partial,
+            progress,
+        }
+    }
+
+    /// Whether this plan models visibility, and why.
+    pub fn visibility(&self) -> &VisibilityAnalysis {
+        &self.visibility
+    }
+
+    /// The occluders, when the scene can occlude.
+    pub fn occluders(&self) -> Option<&Occluders> {
+        self.occluders.as_ref()
+    }
+
+    /// The discretization.
+    pub fn discretization(&self) -> &Arc<Discretization> {
+        &self.disc
+    }
+
+    /// Quadrature options.
+    pub fn options(&self) -> &QuadratureOptions {
+        &self.opts
+    }
+
+    /// The rule ladder.
+    pub fn ladder(&self) -> &RuleLadder {
+        &self.ladder
+    }
+
+    /// Class codes ([`PairClass::code`]), `n × n`, row-major by (element of
+    /// the collocation block, element).
+    pub fn classes(&self) -> &[u8] {
+        &self.classes
+    }
+
+    /// The class of the pair (row block of element `kp`, element `k`).
+    pub fn class(&self, kp: usize, k: usize) -> PairClass {
+        PairClass::from_code(self.classes[kp * self.disc.mesh().len() + k])
+    }
+
+    /// The far table of degree `d`, when some pair uses it.
+    pub fn far_table(&self, d: usize) -> Option<&FarTable> {
+        self.tables.get(d).and_then(|t| t.as_ref())
+    }
+
+    /// Pair statistics.
+    pub fn stats(&self) -> PlanStats {
+        self.stats
+    }
+
+    /// Matrix dimension N.
+    pub fn dim(&self) -> usize {
+        self.disc.len()
+    }
+
+    /// An integrator with this plan's options over its mesh.
+    pub fn integrator(&self) -> ElementIntegrator<'_> {
+        ElementIntegrator::with_self_rule(
+            self.disc.mesh(),
+            &self.ladder,
+            self.opts.clone(),
+            self.self_rule.clone(),
+        )
+    }
+}
+
+/// The class codes of every row block, and (with occluders) each block's
+/// partly visible pairs with their candidate occluders.
+fn classify_all(
+    disc: &Discretization,
+    tol: f64,
+    occluders: Option<&Occluders>,
+    progress: &Option<ProgressHandle>,
+) -> (Vec<u8>, Vec<PartialRow>) {
+    let mesh = disc.mesh();
+    let n = mesh.len();
+    let f = disc.nodes_per_element();
+    let r = disc.nodes().degree();
+    let shapes = ElementShapes::new(mesh);
+    let pts = disc.points();
+    let tree = match occluders {
+        Some(_) => RefinementTree::new(mesh),
+        None => RefinementTree::default(),
+    };
+    let rows: Vec<(Vec<u8>, PartialRow)> = (0..n)
+        .into_par_iter()
+        .map(|kp| {
+            let block = &pts[kp * f..(kp + 1) * f];
+            let mut row: Vec<u8> = (0..n)
+                .map(|k| shapes.classify(kp, block, k, tol, r).code())
+                .collect();
+            let mut partial = PartialRow::default();
+            if let (Some(occ), true) = (occluders, shapes.is_flat(kp)) {
+                let live: Vec<bool> = (0..n)
+                    .map(|k| {
+                        let c = PairClass::from_code(row[k]);
+                        c != PairClass::Culled && c != PairClass::OnElement && shapes.is_flat(k)
+                    })
+                    .collect();
+                partial = partial_pairs(occ, &tree, shapes.planes[kp], &shapes.planes, &live);
+                for &k in &partial.elements {
+                    row[k as usize] = PairClass::Partial.code();
+                }
+            }
+            if let Some(p) = progress {
+                p.advance(1);
+            }
+            (row, partial)
+        })
+        .collect();
+    let mut classes = Vec::with_capacity(n * n);
+    let mut partial = Vec::with_capacity(if occluders.is_some() { n } else { 0 });
+    for (row, p) in rows {
+        classes.extend_from_slice(&row);
+        if occluders.is_some() {
+            partial.push(p);
+        }
+    }
+    (classes, partial)
+}
+
+/// Pair statistics and the far-rule degrees in use.
+fn count(
+    classes: &[u8],
+    f: usize,
+    ladder: &RuleLadder,
+) -> (PlanStats, [bool; MAX_RULE_DEGREE + 1]) {
+    let mut used = [false; MAX_RULE_DEGREE + 1];
+    let mut stats = PlanStats::default();
+    let f64_ = f as u64;
+    for &c in classes {
+        match PairClass::from_code(c) {
+            PairClass::Culled => stats.pairs_culled += f64_,
+            PairClass::Near => stats.pairs_near += f64_,
+            PairClass::OnElement => stats.pairs_self += f64_,
+            PairClass::Partial => stats.pairs_partial += f64_,
+            PairClass::Far(d) => {
+                let d = d as usize;
+                used[d] = true;
+                stats.pairs_far += f64_;
+                stats.far_kernel_evals += (f * ladder.rule(d).len()) as u64;
+            }
+        }
+    }
+    (stats, used)
+}

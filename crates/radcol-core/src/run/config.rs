@@ -1,0 +1,56 @@
+//! What one solve is asked to do: degree, α, refinement, solver, quadrature.
+
+use crate::assembly::QuadratureOptions;
+use crate::progress::ProgressHandle;
+use crate::solve::GmresParams;
+use serde::Serialize;
+
+/// Which linear solver.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SolverKind {
+    /// Restarted GMRES on the dense operator.
+    Gmres,
+    /// Dense LU (faer), one factorisation per distinct ρ.
+    Lu,
+}
+
+/// Everything that sets up one discretization and solve.
+#[derive(Clone, Debug)]
+pub struct SolveConfig {
+    /// Polynomial degree r (0..=6).
+    pub degree: usize,
+    /// Node parameter α in (0, 1/3).
+    pub alpha: f64,
+    /// Refinement level of the base triangulation.
+    pub level: u32,
+    /// Linear solver.
+    pub solver: SolverKind,
+    /// GMRES settings (tolerance also used to report LU's residual).
+    pub gmres: GmresParams,
+    /// Quadrature accuracy.
+    pub quad: QuadratureOptions,
+    /// Refuse problems whose dense matrix would not fit in memory.
+    pub check_memory: bool,
+    /// After the uniform `level`, refine elements 4:1 until every mapped edge
+    /// is at most this long (scene units); None: uniform refinement only.
+    pub max_edge: Option<f64>,
+    /// Progress observer (assembly row blocks, channels solved), if any.
+    pub progress: Option<ProgressHandle>,
+}
+
+impl Default for SolveConfig {
+    fn default() -> Self {
+        Self {
+            degree: 1,
+            alpha: 1.0 / 6.0,
+            level: 2,
+            solver: SolverKind::Gmres,
+            gmres: GmresParams::default(),
+            quad: QuadratureOptions::default(),
+            check_memory: true,
+            max_edge: None,
+            progress: None,
+        }
+    }
+}

@@ -1,0 +1,23 @@
+//! The solve pipeline, one stage a step, each stage's result the next one's
+//! input:
+//!
+//! ```text
+//! Problem ─ visibility::analyze ─> VisibilityAnalysis (decided once, refused if unsupported)
+//!         ─ discretize ──────────> Discretization (sizes checked before anything is built)
+//!         ─ fields ──────────────> ρ and E at the nodes, per channel
+//!         ─ AssemblyPlan + backend > geometric matrix Gm
+//!         ─ channels ────────────> u_n per channel (GMRES or LU)
+//!         ─ errors ──────────────> norms against an exact u, when known
+//! ```
+//!
+//! [`solve`] runs them all; [`crate::study::study`] repeats it over levels.
+
+mod config;
+mod outcome;
+mod pipeline;
+mod size;
+
+pub use config::{SolveConfig, SolverKind};
+pub use outcome::{ChannelResult, SolveOutcome, SolverReport, Timings};
+pub use pipeline::{check_size, discretize, solve, true_residual};
+pub use size::{available_memory, elements, mesh_size, MemoryEstimate, MeshSize};

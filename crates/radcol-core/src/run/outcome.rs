@@ -1,0 +1,86 @@
+//! What one solve produced: nodal solutions per channel, with timings, pair
+//! statistics, the visibility decision and (when u is known) errors.
+
+use super::SolverKind;
+use crate::assembly::{BackendInfo, PlanStats};
+use crate::discretization::Discretization;
+use crate::matrix::DenseMatrix;
+use crate::norms::ErrorNorms;
+use crate::solution::Solution;
+use crate::visibility::VisibilityAnalysis;
+use serde::Serialize;
+use std::sync::Arc;
+
+/// Wall-clock seconds per stage.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct Timings {
+    /// Mesh, nodes and discretization.
+    pub mesh_s: f64,
+    /// Evaluating ρ and E at the nodes (includes manufacturing E).
+    pub rhs_s: f64,
+    /// Plan and matrix fill.
+    pub assembly_s: f64,
+    /// Linear solves, all channels.
+    pub solve_s: f64,
+    /// Error norms against the exact solution.
+    pub errors_s: f64,
+    /// Everything.
+    pub total_s: f64,
+}
+
+/// How a channel's linear system was solved.
+#[derive(Clone, Debug, Serialize)]
+pub struct SolverReport {
+    /// "gmres" or "lu".
+    pub kind: SolverKind,
+    /// GMRES iterations (0 for LU).
+    pub iterations: usize,
+    /// True relative residual ‖b - A x‖ / ‖b‖.
+    pub residual: f64,
+}
+
+/// One channel's result.
+#[derive(Clone, Debug)]
+pub struct ChannelResult {
+    /// Channel name.
+    pub name: String,
+    /// u_n.
+    pub solution: Solution,
+    /// ρ at the nodes.
+    pub rho: Vec<f64>,
+    /// E at the nodes.
+    pub emission: Vec<f64>,
+    /// Solver report.
+    pub solver: SolverReport,
+    /// ∫_S u_n.
+    pub integral_u: f64,
+    /// ∫_S of the interpolated emission.
+    pub integral_e: f64,
+    /// Errors, when the exact solution is known.
+    pub errors: Option<ErrorNorms>,
+}
+
+/// Everything a solve produced.
+#[derive(Debug)]
+pub struct SolveOutcome {
+    /// The discretization solved on.
+    pub discretization: Arc<Discretization>,
+    /// The geometric matrix (kept for exports and checks).
+    pub matrix: DenseMatrix,
+    /// Mesh size h (eq. 11).
+    pub h: f64,
+    /// Backend that assembled.
+    pub backend: BackendInfo,
+    /// Pair statistics of the plan.
+    pub plan: PlanStats,
+    /// Whether visibility was modelled, and why.
+    pub visibility: VisibilityAnalysis,
+    /// Kernel evaluations of the assembly.
+    pub kernel_evals: u64,
+    /// Device seconds of the assembly, when measured.
+    pub device_seconds: Option<f64>,
+    /// Per-channel results.
+    pub channels: Vec<ChannelResult>,
+    /// Timings.
+    pub timings: Timings,
+}

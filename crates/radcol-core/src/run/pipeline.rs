@@ -1,0 +1,311 @@
+//! The stages of one solve (see the module overview in [`super`]).
+
+use super::size::{mesh_size, MemoryEstimate};
+use super::{ChannelResult, SolveConfig, SolveOutcome, SolverKind, SolverReport, Timings};
+use crate::assembly::{Assembled, AssemblyBackend, AssemblyPlan};
+use crate::discretization::Discretization;
+use crate::error::{Error, InputError};
+use crate::mesh::Mesh;
+use crate::nodes::NodeSet;
+use crate::norms::error_norms;
+use crate::problem::{Field, Problem};
+use crate::solution::{integrate_nodal, Solution};
+use crate::solve::{gmres, DenseLu, LinearOperator, RadiosityOperator};
+use crate::visibility::{self, VisibilityAnalysis};
+use rayon::prelude::*;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Checks, before anything is built, that the mesh `cfg` asks for on
+/// `problem`'s surface is valid and its dense matrices fit in memory (when
+/// `cfg.check_memory`); returns its unknowns.
+pub fn check_size(problem: &Problem, cfg: &SolveConfig) -> Result<u64, InputError> {
+    if let Some(h) = cfg.max_edge {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(InputError::MaxEdge { value: h });
+        }
+    }
+    let n = mesh_size(&problem.surface, cfg.level, cfg.max_edge, cfg.degree).unknowns;
+    if cfg.check_memory {
+        MemoryEstimate::new(n).check(cfg.solver)?;
+    }
+    Ok(n)
+}
+
+/// Builds the mesh and collocation points for `cfg`, refusing sizes that do
+/// not fit in memory ([`check_size`]) before building anything.
+pub fn discretize(problem: &Problem, cfg: &SolveConfig) -> Result<Arc<Discretization>, Error> {
+    let nodes = NodeSet::new(cfg.degree, cfg.alpha)?;
+    check_size(problem, cfg)?;
+    let surface = &problem.surface;
+    let mesh = Arc::new(match cfg.max_edge {
+        Some(h) => Mesh::with_max_edge(surface.clone(), cfg.level, h),
+        None => Mesh::new(surface.clone(), cfg.level),
+    });
+    Ok(Arc::new(Discretization::new(mesh, nodes)))
+}
+
+/// Evaluates `field` at every collocation point, rejecting non-finite values.
+fn eval_at_nodes(disc: &Discretization, field: &Field, what: &str) -> Result<Vec<f64>, InputError> {
+    let mesh = disc.mesh();
+    let values: Vec<f64> = disc
+        .points()
+        .par_iter()
+        .map(|p| field.eval(&mesh.site(p.element, p.st[0], p.st[1])))
+        .collect();
+    if let Some((i, &v)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        let p = disc.points()[i];
+        return Err(InputError::InvalidValue {
+            what: what.into(),
+            value: v,
+            element: p.element,
+            node: p.node,
+            position: p.position,
+        });
+    }
+    Ok(values)
+}
+
+/// ρ and E of one channel at the nodes.
+type NodalFields = (Vec<f64>, Vec<f64>);
+
+/// ρ and E of every channel at the nodes, ρ checked against [0, 1).
+fn fields(disc: &Discretization, problem: &Problem) -> Result<Vec<NodalFields>, Error> {
+    let single = problem.channels.len() == 1;
+    let mut fields = Vec::new();
+    for ch in &problem.channels {
+        // "reflectivity" alone for a scalar problem, "reflectivity R" for a colour channel.
+        let label = |what: &str| {
+            if single {
+                what.to_string()
+            } else {
+                format!("{what} {}", ch.name)
+            }
+        };
+        let rho = eval_at_nodes(disc, &ch.rho, &label("reflectivity"))?;
+        if let Some((i, &v)) = rho
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !(0.0..1.0).contains(*v))
+        {
+            let p = disc.points()[i];
+            return Err(InputError::Reflectivity {
+                name: label("reflectivity"),
+                value: v,
+                element: p.element,
+                node: p.node,
+                position: p.position,
+            }
+            .into());
+        }
+        let emission = eval_at_nodes(disc, &ch.emission, &label("emission"))?;
+        fields.push((rho, emission));
+    }
+    Ok(fields)
+}
+
+/// Solves every channel's system (I - diag ρ_c Gm) u = E_c; LU factors are
+/// shared between consecutive channels with equal ρ.
+fn solve_channels(
+    problem: &Problem,
+    cfg: &SolveConfig,
+    disc: &Arc<Discretization>,
+    matrix: &crate::matrix::DenseMatrix,
+    fields: Vec<NodalFields>,
+) -> Result<Vec<ChannelResult>, Error> {
+    let mut channels = Vec::new();
+    let mut lu_cache: Option<(Vec<f64>, DenseLu)> = None;
+    if let Some(p) = &cfg.progress {
+        p.start("solve", problem.channels.len() as u64);
+    }
+    for (ch, (rho, emission)) in problem.channels.iter().zip(fields) {
+        let op = RadiosityOperator::new(matrix, &rho)?;
+        let mut x = emission.clone();
+        let iterations = match cfg.solver {
+            SolverKind::Gmres => gmres(&op, &emission, &mut x, &cfg.gmres)?.iterations,
+            SolverKind::Lu => {
+                if lu_cache.as_ref().is_none_or(|(r, _)| *r != rho) {
+                    lu_cache = Some((rho.clone(), DenseLu::factor(&op.to_dense())?));
+                }
+                let (_, lu) = lu_cache.as_ref().expect("just built");
+                lu.solve_in_place(&mut x)?;
+                0
+            }
+        };
+        let residual = true_residual(&op, &x, &emission);
+        let integral_e = integrate_nodal(disc, &emission);
+        let solution = Solution::new(disc.clone(), x);
+        channels.push(ChannelResult {
+            name: ch.name.clone(),
+            integral_u: solution.integral(),
+            integral_e,
+            solution,
+            rho,
+            emission,
+            solver: SolverReport {
+                kind: cfg.solver,
+                iterations,
+                residual,
+            },
+            errors: None,
+        });
+        if let Some(p) = &cfg.progress {
+            p.advance(1);
+        }
+    }
+    Ok(channels)
+}
+
+/// Plans the assembly (with `visibility`, decided by the caller) and fills
+/// the geometric matrix on `backend`.
+fn assemble(
+    disc: &Arc<Discretization>,
+    cfg: &SolveConfig,
+    visibility: &VisibilityAnalysis,
+    backend: &dyn AssemblyBackend,
+) -> Result<(AssemblyPlan, Assembled), Error> {
+    let plan = AssemblyPlan::with_progress(
+        disc.clone(),
+        cfg.quad.clone(),
+        visibility,
+        cfg.progress.clone(),
+    );
+    if let Some(p) = &cfg.progress {
+        p.start("assembly", disc.mesh().len() as u64);
+    }
+    let assembled = backend.assemble(&plan)?;
+    Ok((plan, assembled))
+}
+
+/// Solves `problem` with `cfg`, assembling on `backend`.
+pub fn solve(
+    problem: &Problem,
+    cfg: &SolveConfig,
+    backend: &dyn AssemblyBackend,
+) -> Result<SolveOutcome, Error> {
+    let t0 = Instant::now();
+    let visibility = visibility::analyze(&problem.surface);
+    visibility.check_supported()?;
+    let disc = discretize(problem, cfg)?;
+    let h = disc.mesh().h();
+    let mesh_s = t0.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let fields = fields(&disc, problem)?;
+    let rhs_s = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let (plan, assembled) = assemble(&disc, cfg, &visibility, backend)?;
+    let assembly_s = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let mut channels = solve_channels(problem, cfg, &disc, &assembled.matrix, fields)?;
+    let solve_s = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    if let (Some(exact), Some(first)) = (&problem.exact, channels.first_mut()) {
+        first.errors = Some(error_norms(&first.solution, exact));
+    }
+    let errors_s = t.elapsed().as_secs_f64();
+
+    Ok(SolveOutcome {
+        h,
+        backend: backend.info(),
+        plan: plan.stats(),
+        visibility,
+        kernel_evals: assembled.kernel_evals,
+        device_seconds: assembled.device_seconds,
+        matrix: assembled.matrix,
+        discretization: disc,
+        channels,
+        timings: Timings {
+            mesh_s,
+            rhs_s,
+            assembly_s,
+            solve_s,
+            errors_s,
+            total_s: t0.elapsed().as_secs_f64(),
+        },
+    })
+}
+
+/// ‖b - A x‖ / ‖b‖ (‖A x‖-free: 0 when b = 0 and x = 0).
+pub fn true_residual(op: &dyn LinearOperator, x: &[f64], b: &[f64]) -> f64 {
+    let mut ax = vec![0.0; b.len()];
+    op.apply(x, &mut ax);
+    let num: f64 = ax
+        .iter()
+        .zip(b)
+        .map(|(a, b)| (b - a) * (b - a))
+        .sum::<f64>()
+        .sqrt();
+    let den: f64 = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+    if den > 0.0 {
+        num / den
+    } else {
+        num
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::shapes::box_room;
+
+    /// `max_edge` reaches the mesh, bad values are refused, and the memory
+    /// check sees the refined count before anything is built.
+    #[test]
+    fn discretize_honours_max_edge() {
+        let problem = Problem::new(
+            Arc::new(box_room(1.0, 2.0, 3.0)),
+            Field::Constant(0.5),
+            Field::Constant(1.0),
+        );
+        let cfg = |max_edge| SolveConfig {
+            degree: 0,
+            level: 0,
+            max_edge,
+            ..Default::default()
+        };
+        // Closed form (see mesh.rs): 12 triangles, each 16 children for H = 1.
+        let d = discretize(&problem, &cfg(Some(1.0))).unwrap();
+        assert_eq!(d.mesh().len(), 192);
+        assert_eq!(d.len(), 192);
+        assert_eq!(discretize(&problem, &cfg(None)).unwrap().len(), 12);
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let msg = discretize(&problem, &cfg(Some(bad)))
+                .unwrap_err()
+                .to_string();
+            assert!(msg.contains("max edge length"), "{msg}");
+        }
+        if super::super::available_memory().is_some() {
+            let err = discretize(&problem, &cfg(Some(1e-9))).unwrap_err();
+            assert!(
+                matches!(err, Error::Input(InputError::TooLarge { .. })),
+                "{err}"
+            );
+        }
+    }
+
+    /// A curved surface not known to bound a convex set is refused (radcol
+    /// cannot clip curved elements); flat ones that occlude are accepted.
+    #[test]
+    fn occluding_curved_surfaces_are_refused() {
+        let mut open_sphere = crate::geometry::shapes::sphere(1.0);
+        open_sphere.convex_enclosure = false;
+        let problem = |s| Problem::new(Arc::new(s), Field::Constant(0.5), Field::Constant(1.0));
+        let cfg = SolveConfig {
+            degree: 0,
+            level: 0,
+            ..Default::default()
+        };
+        let backend = crate::assembly::CpuBackend;
+        let msg = solve(&problem(open_sphere), &cfg, &backend)
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("curved") && msg.contains("octant"), "{msg}");
+        let flat = crate::geometry::shapes::room_with_cube();
+        assert!(crate::visibility::analyze(&flat).needed);
+        assert!(solve(&problem(flat), &cfg, &backend).is_ok());
+    }
+}

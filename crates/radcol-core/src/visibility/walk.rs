@@ -1,0 +1,238 @@
+//! Which element pairs of a scene that occludes are partly visible: the
+//! refinement tree of every base triangle, walked per row block so that a
+//! node's candidate occluders bound its descendants'.
+
+use super::Occluders;
+use crate::geometry::barycentric_st;
+use crate::mesh::{Element, Mesh};
+use glam::DVec3;
+
+/// A flat triangle's mapped vertices and unit normal.
+pub(crate) type Plane = ([DVec3; 3], DVec3);
+
+/// The partial pairs of one row block: elements (ascending) and their
+/// occluder candidates, flattened.
+#[derive(Debug, Default)]
+pub(crate) struct PartialRow {
+    pub(crate) elements: Vec<u32>,
+    ranges: Vec<(u32, u32)>,
+    candidates: Vec<u32>,
+}
+
+impl PartialRow {
+    pub(crate) fn candidates_of(&self, k: usize) -> &[u32] {
+        let i = self
+            .elements
+            .binary_search(&(k as u32))
+            .expect("every partial pair is listed");
+        let (start, len) = self.ranges[i];
+        &self.candidates[start as usize..(start + len) as usize]
+    }
+}
+
+/// The partly visible elements seen from flat element `a` (the row block's):
+/// every element `k` with `live[k]` (not culled, not the block's own, flat)
+/// that some occluder may hide from `a`, or that straddles `a`'s plane, with
+/// its candidate occluders. `flat_geom[k]` is element k's plane.
+pub(crate) fn partial_pairs(
+    occ: &Occluders,
+    tree: &RefinementTree,
+    a: Plane,
+    flat_geom: &[Plane],
+    live: &[bool],
+) -> PartialRow {
+    let walk = Walk {
+        occ,
+        a,
+        tree,
+        live,
+        flat_geom,
+    };
+    let mut partial = PartialRow::default();
+    for &root in &tree.roots {
+        walk.visit(root, None, &mut partial);
+    }
+    partial
+}
+
+/// True when flat element B straddles the plane of flat element A: the
+/// clamped cosine at A's points has a kink inside B, so B is integrated over
+/// its part in front of each point (curved elements are never partial: curved
+/// scenes that occlude are refused before assembly).
+fn straddles((va, na): Plane, vb: [DVec3; 3], scale: f64) -> bool {
+    let tol = 1e-12 * scale;
+    let side = vb.map(|x| (x - va[0]).dot(na));
+    side.iter().any(|&d| d > tol) && side.iter().any(|&d| d < -tol)
+}
+
+/// One node of a base triangle's refinement tree: the consecutive elements
+/// inside triangle `vertices` (refinement numbers descendants consecutively).
+struct TreeNode {
+    start: usize,
+    end: usize,
+    /// Mapped vertices and unit normal of the node's (flat) triangle.
+    vertices: [DVec3; 3],
+    normal: DVec3,
+    /// Child nodes (indices into `RefinementTree::nodes`).
+    children: Vec<u32>,
+    /// First element of the range not under a child (`end` when the
+    /// elements follow the refinement, as radcol's meshes do).
+    rest: usize,
+}
+
+/// The refinement trees of the base triangles over the elements of a mesh,
+/// built once per plan for scenes that occlude (flat patches).
+#[derive(Default)]
+pub(crate) struct RefinementTree {
+    nodes: Vec<TreeNode>,
+    roots: Vec<u32>,
+}
+
+impl RefinementTree {
+    /// Falls back to one root per element when the elements are not grouped
+    /// by base triangle.
+    pub(crate) fn new(mesh: &Mesh) -> Self {
+        let mut tree = Self::default();
+        let mut k = 0;
+        for (j, p) in mesh.surface().patches.iter().enumerate() {
+            for &param in &p.triangles {
+                let root = Element {
+                    patch: j as u32,
+                    param,
+                };
+                let start = k;
+                while k < mesh.len() && inside(mesh, &root, k) {
+                    k += 1;
+                }
+                if k > start {
+                    let id = tree.build(mesh, root, start..k);
+                    tree.roots.push(id);
+                }
+            }
+        }
+        if k == mesh.len() {
+            return tree;
+        }
+        let mut tree = Self::default();
+        for k in 0..mesh.len() {
+            let id = tree.build(mesh, mesh.elements()[k], k..k + 1);
+            tree.roots.push(id);
+        }
+        tree
+    }
+
+    fn build(&mut self, mesh: &Mesh, node: Element, range: std::ops::Range<usize>) -> u32 {
+        let map = &mesh.surface().patches[node.patch as usize].map;
+        let vertices = node.param.map(|x| map.map(x));
+        let normal = (vertices[1] - vertices[0])
+            .cross(vertices[2] - vertices[0])
+            .normalize_or_zero();
+        let id = self.nodes.len();
+        self.nodes.push(TreeNode {
+            start: range.start,
+            end: range.end,
+            vertices,
+            normal,
+            children: Vec::new(),
+            rest: range.end,
+        });
+        if range.len() > 1 {
+            let mut k = range.start;
+            let mut children = Vec::with_capacity(4);
+            for child in node.children() {
+                let start = k;
+                while k < range.end && inside(mesh, &child, k) {
+                    k += 1;
+                }
+                if k > start {
+                    children.push(self.build(mesh, child, start..k));
+                }
+            }
+            self.nodes[id].children = children;
+            self.nodes[id].rest = k;
+        }
+        id as u32
+    }
+}
+
+/// True when element `k`'s parameter centroid lies in `node`'s triangle.
+fn inside(mesh: &Mesh, node: &Element, k: usize) -> bool {
+    let e = &mesh.elements()[k];
+    let x = (e.param[0] + e.param[1] + e.param[2]) / 3.0;
+    let [a, b, c] = node.param;
+    e.patch == node.patch && barycentric_st(a, b, c, x).is_some()
+}
+
+/// Finds the partly visible elements of one row block (flat element A) by
+/// walking the refinement tree of every base triangle: an occluder that
+/// misses conv(A ∪ T) for a node T of the tree misses conv(A ∪ B) for every
+/// element B below it, so each node is tested only against its parent's
+/// candidates, and a subtree without any is not descended.
+struct Walk<'a> {
+    occ: &'a Occluders,
+    a: Plane,
+    tree: &'a RefinementTree,
+    live: &'a [bool],
+    flat_geom: &'a [Plane],
+}
+
+impl Walk<'_> {
+    fn live(&self, k: usize) -> bool {
+        self.live[k]
+    }
+
+    fn candidates(&self, b: Plane, among: Option<&[u32]>, out: &mut Vec<u32>) {
+        match among {
+            None => self.occ.pair_candidates(self.a, b, out),
+            Some([]) => {}
+            Some(among) => self.occ.pair_candidates_among(self.a, b, among, out),
+        }
+    }
+
+    fn mark(&self, k: usize, cands: &[u32], partial: &mut PartialRow) {
+        if straddles(self.a, self.flat_geom[k].0, self.occ.scale()) || !cands.is_empty() {
+            partial.elements.push(k as u32);
+            partial
+                .ranges
+                .push((partial.candidates.len() as u32, cands.len() as u32));
+            partial.candidates.extend_from_slice(cands);
+        }
+    }
+
+    fn visit(&self, id: u32, among: Option<&[u32]>, partial: &mut PartialRow) {
+        let node = &self.tree.nodes[id as usize];
+        if !(node.start..node.end).any(|k| self.live(k)) {
+            return;
+        }
+        let mut cands = Vec::new();
+        if node.end - node.start == 1 {
+            // The node is the element itself.
+            let k = node.start;
+            self.candidates(self.flat_geom[k], among, &mut cands);
+            self.mark(k, &cands, partial);
+            return;
+        }
+        self.candidates((node.vertices, node.normal), among, &mut cands);
+        if cands.is_empty() {
+            for k in node.start..node.end {
+                if self.live(k) {
+                    self.mark(k, &[], partial);
+                }
+            }
+            return;
+        }
+        for &child in &node.children {
+            self.visit(child, Some(&cands), partial);
+        }
+        // Elements not in refinement order (not produced by radcol's meshes):
+        // tested one by one against this node's candidates.
+        let mut one = Vec::new();
+        for k in node.rest..node.end {
+            if self.live(k) {
+                one.clear();
+                self.candidates(self.flat_geom[k], Some(&cands), &mut one);
+                self.mark(k, &one, partial);
+            }
+        }
+    }
+}

@@ -1,0 +1,18 @@
+//! radcol's cross-crate tests, one integration binary (CI links once): each
+//! module is one claim of the README's verification table.
+//!
+//! Run one module with `cargo test --release -p radcol-tests --test
+//! integration MODULE::` (for example `visibility::`), and add
+//! `-- --nocapture` for the measured figures.
+
+mod box_constant;
+mod cli;
+mod ellipsoid_orders;
+mod gpu_conformance;
+mod gpu_select;
+mod gpu_solve;
+mod house;
+mod scenes;
+mod solvers_agree;
+mod sphere_orders;
+mod visibility;
