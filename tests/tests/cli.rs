@@ -46,10 +46,15 @@ fn radcol_bin() -> &'static Path {
         };
         let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
         let mut cmd = Command::new(cargo);
+        // With the features of the workspace's test build (this crate turns
+        // on radcol-core's `conformance`), so that cargo reuses its artifacts
+        // instead of compiling core, GPU crate and CLI a second time.
         cmd.arg("build")
             .arg("--quiet")
             .arg("-p")
             .arg("radcol-cli")
+            .arg("--features")
+            .arg("radcol-core/conformance")
             .arg("--profile")
             .arg(profile)
             .arg("--manifest-path")
