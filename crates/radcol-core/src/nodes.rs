@@ -16,6 +16,12 @@ use crate::quadrature::{collapsed::collapsed_rule, monomial_integral};
 /// Largest polynomial degree supported.
 pub const MAX_DEGREE: usize = 6;
 
+/// Lattice step 1/`LEBESGUE_GRID` of the samples that locate Λ's maximum.
+const LEBESGUE_GRID: usize = 240;
+
+/// Best samples refined by compass search.
+const LEBESGUE_STARTS: usize = 12;
+
 /// f_r = (r + 1)(r + 2) / 2: nodes per element at degree r.
 pub const fn nodes_per_element(r: usize) -> usize {
     (r + 1) * (r + 2) / 2
@@ -182,6 +188,52 @@ impl NodeSet {
             .collect()
     }
 
+    /// The Lebesgue constant Λ = max over σ of Σ_j |l_j(s, t)|: the factor
+    /// by which interpolation at these nodes can amplify data (‖I_n u‖∞ ≤
+    /// Λ ‖u‖∞ on each element). Found by sampling σ on a lattice of step
+    /// 1/`LEBESGUE_GRID` and refining the best samples by compass search;
+    /// exact (to rounding) where the maximum sits at a vertex of σ, as it
+    /// does for r ≤ 1.
+    pub fn lebesgue_constant(&self) -> f64 {
+        let mut l = vec![0.0; self.len()];
+        let mut value = |s: f64, t: f64| {
+            self.eval_basis(s, t, &mut l);
+            l.iter().map(|v| v.abs()).sum::<f64>()
+        };
+        let m = LEBESGUE_GRID;
+        let mut samples: Vec<(f64, f64, f64)> = Vec::with_capacity((m + 1) * (m + 2) / 2);
+        for i in 0..=m {
+            for j in 0..=(m - i) {
+                let (s, t) = (i as f64 / m as f64, j as f64 / m as f64);
+                samples.push((value(s, t), s, t));
+            }
+        }
+        samples.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let mut best = samples[0].0;
+        for &(v0, s0, t0) in samples.iter().take(LEBESGUE_STARTS) {
+            let (mut v, mut s, mut t) = (v0, s0, t0);
+            let mut h = 1.0 / m as f64;
+            while h > 1e-13 {
+                let mut moved = false;
+                for (ds, dt) in [(h, 0.0), (-h, 0.0), (0.0, h), (0.0, -h), (h, -h), (-h, h)] {
+                    let (s1, t1) = (s + ds, t + dt);
+                    if s1 < 0.0 || t1 < 0.0 || s1 + t1 > 1.0 {
+                        continue;
+                    }
+                    let v1 = value(s1, t1);
+                    if v1 > v {
+                        (v, s, t, moved) = (v1, s1, t1, true);
+                    }
+                }
+                if !moved {
+                    h *= 0.5;
+                }
+            }
+            best = best.max(v);
+        }
+        best
+    }
+
     /// The degree of precision of the interpolatory rule (16): the largest d such
     /// that all monomials of degree ≤ d are integrated to 1e-13 relative.
     pub fn precision(&self) -> usize {
@@ -204,6 +256,44 @@ impl NodeSet {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// r = 1: Σ|λ_i| is convex and piecewise linear, so Λ sits at a vertex of
+    /// σ, whose barycentric coordinates relative to the shrunken node
+    /// triangle (scaled by k = 1 - 3α about the centroid) are 1/3 + 2/(3k)
+    /// and twice 1/3 - 1/(3k): Λ = 4/(3k) - 1/3, 7/3 at α0 = 1/6.
+    #[test]
+    fn lebesgue_constant_of_degree_one_is_the_closed_form() {
+        for alpha in [0.02, 0.1, 1.0 / 6.0, 0.25, 0.3] {
+            let k = 1.0 - 3.0 * alpha;
+            let want = 4.0 / (3.0 * k) - 1.0 / 3.0;
+            let got = NodeSet::new(1, alpha).unwrap().lebesgue_constant();
+            crate::assert_close!(got, want, 1e-13 * want, "alpha = {alpha}");
+        }
+        assert_eq!(NodeSet::new(0, 0.1).unwrap().lebesgue_constant(), 1.0);
+    }
+
+    /// Higher degrees against an independent brute-force maximum over a
+    /// lattice ten times finer: the search never finds less, and the two
+    /// agree to the lattice's resolution.
+    #[test]
+    fn lebesgue_constant_matches_a_fine_lattice() {
+        for (r, alpha) in [(2, 0.2319), (2, 0.109), (3, 0.0779365403436462), (5, 0.05)] {
+            let set = NodeSet::new(r, alpha).unwrap();
+            let mut l = vec![0.0; set.len()];
+            let m = 2400;
+            let mut brute = 0.0f64;
+            for i in 0..=m {
+                for j in 0..=(m - i) {
+                    set.eval_basis(i as f64 / m as f64, j as f64 / m as f64, &mut l);
+                    brute = brute.max(l.iter().map(|v| v.abs()).sum());
+                }
+            }
+            let got = set.lebesgue_constant();
+            println!("r = {r}, alpha = {alpha}: Λ = {got:.6} (lattice 1/{m}: {brute:.6})");
+            assert!(got >= brute * (1.0 - 1e-12), "r = {r}: {got} < {brute}");
+            crate::assert_close!(got, brute, 1e-5 * brute, "r = {r}, alpha = {alpha}");
+        }
+    }
 
     #[test]
     fn basis_is_cardinal_and_partition_of_unity() {

@@ -26,6 +26,7 @@ pub struct NodesReport {
     nodes: Vec<Node>,
     weight_sum: f64,
     precision: usize,
+    lebesgue_constant: f64,
     alpha0: Option<f64>,
     alpha0_reason: String,
     best_alpha: f64,
@@ -52,6 +53,7 @@ impl NodesReport {
                 .collect(),
             weight_sum: set.weights().iter().sum(),
             precision: set.precision(),
+            lebesgue_constant: set.lebesgue_constant(),
             alpha0: a0.alpha0,
             alpha0_reason: a0.reason.clone(),
             best_alpha: a0.best_alpha,
@@ -89,6 +91,11 @@ impl fmt::Display for NodesReport {
             self.weight_sum
         )?;
         writeln!(f, "degree of precision {}", self.precision)?;
+        writeln!(
+            f,
+            "Lebesgue constant {:.6} (max over the triangle of Σ|l_j|: interpolation amplifies data by at most this)",
+            self.lebesgue_constant
+        )?;
         match self.alpha0 {
             Some(a) => writeln!(f, "alpha0 = {a:.17}")?,
             None => writeln!(
