@@ -51,7 +51,7 @@ fn gpu_is_an_adapter_or_a_clear_error() {
             println!("gpu: {msg}");
             assert!(!gpu_required(), "RADCOL_REQUIRE_GPU is set but: {msg}");
             // The library names the fallback; the CLI adds its flag
-            // (tests/tests/cli.rs).
+            // (crates/radcol-cli/tests/cli.rs).
             assert!(
                 msg.contains("no GPU adapter") && msg.contains("CPU backend"),
                 "{msg}"

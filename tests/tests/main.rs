@@ -1,12 +1,13 @@
 //! radcol's cross-crate tests, one integration binary (CI links once): each
-//! module is one claim of the README's verification table.
+//! module is one claim of the README's verification table. The end-to-end
+//! tests of the `radcol` command live with it (`crates/radcol-cli/tests/cli.rs`),
+//! where cargo builds the binary they run.
 //!
 //! Run one module with `cargo test --release -p radcol-tests --test
 //! integration MODULE::` (for example `visibility::`), and add
 //! `-- --nocapture` for the measured figures.
 
 mod box_constant;
-mod cli;
 mod ellipsoid_orders;
 mod gpu_conformance;
 mod gpu_select;

@@ -1,81 +1,17 @@
 //! End-to-end tests of the `radcol` binary: JSON contracts, CSV output, the
 //! overwrite rule, studies, node sets, and one-line errors with exit codes.
 //!
-//! This crate does not depend on radcol-cli, so `CARGO_BIN_EXE_radcol` is not
-//! set: the binary is found next to the test executable's profile directory
-//! (`target/<profile>/radcol`, the test lives in `target/<profile>/deps/`) and
-//! built with `cargo build -p radcol-cli` in the same profile first, which is a
-//! no-op when it is up to date and keeps the tests from running a stale binary.
+//! The binary is cargo's own build of this crate's `radcol`
+//! (`CARGO_BIN_EXE_radcol`), made by the same `cargo test` with the same
+//! features, so nothing is compiled twice.
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-use std::sync::OnceLock;
 
-fn workspace_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .expect("tests/ lives in the workspace root")
-        .to_path_buf()
-}
-
-/// `target/<profile>/radcol`, built (or refreshed) once per test run.
+/// The `radcol` binary under test.
 fn radcol_bin() -> &'static Path {
-    static BIN: OnceLock<PathBuf> = OnceLock::new();
-    BIN.get_or_init(|| {
-        let exe = std::env::current_exe().expect("test executable path");
-        let deps = exe.parent().expect("target/<profile>/deps");
-        let profile_dir = if deps.file_name().is_some_and(|n| n == "deps") {
-            deps.parent().expect("target/<profile>")
-        } else {
-            deps
-        };
-        let bin = profile_dir.join(format!("radcol{}", std::env::consts::EXE_SUFFIX));
-        let profile =
-            profile_dir
-                .file_name()
-                .and_then(|n| n.to_str())
-                .unwrap_or(if cfg!(debug_assertions) {
-                    "debug"
-                } else {
-                    "release"
-                });
-        let profile = match profile {
-            "debug" => "dev",
-            other => other,
-        };
-        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-        let mut cmd = Command::new(cargo);
-        // With the features of the workspace's test build (this crate turns
-        // on radcol-core's `conformance`), so that cargo reuses its artifacts
-        // instead of compiling core, GPU crate and CLI a second time.
-        cmd.arg("build")
-            .arg("--quiet")
-            .arg("-p")
-            .arg("radcol-cli")
-            .arg("--features")
-            .arg("radcol-core/conformance")
-            .arg("--profile")
-            .arg(profile)
-            .arg("--manifest-path")
-            .arg(workspace_root().join("Cargo.toml"));
-        if let Some(target_dir) = profile_dir.parent() {
-            cmd.arg("--target-dir").arg(target_dir);
-        }
-        let status = cmd.status();
-        match status {
-            Ok(s) if s.success() => {}
-            // Offline machines or a cargo that cannot run: use what is there.
-            _ if bin.exists() => {
-                eprintln!("note: could not rebuild radcol, testing {}", bin.display())
-            }
-            other => panic!(
-                "building radcol failed ({other:?}) and {} does not exist",
-                bin.display()
-            ),
-        }
-        bin
-    })
+    Path::new(env!("CARGO_BIN_EXE_radcol"))
 }
 
 fn radcol(args: &[&str]) -> Output {
