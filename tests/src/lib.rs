@@ -47,6 +47,8 @@ pub fn assert_orders(
     let cfg = SolveConfig {
         degree: r,
         alpha: auto_alpha(r),
+        // Orders only: the estimate has tests of its own (estimate.rs).
+        estimate: false,
         ..Default::default()
     };
     println!("{label} r = {r}, alpha = {}", cfg.alpha);

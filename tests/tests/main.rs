@@ -9,11 +9,13 @@
 
 mod box_constant;
 mod ellipsoid_orders;
+mod estimate;
 mod gpu_conformance;
 mod gpu_select;
 mod gpu_solve;
 mod house;
 mod scenes;
+mod shadows;
 mod solvers_agree;
 mod sphere_orders;
 mod visibility;

@@ -138,6 +138,11 @@ pub struct ProblemArgs {
     #[arg(long, value_enum, default_value_t = PrecisionArg::Auto)]
     pub precision: PrecisionArg,
 
+    /// Skip the a posteriori error estimate (the residual E + K u_n - u_n at check points
+    /// of every element, about as much work again as the assembly) [default: estimate].
+    #[arg(long)]
+    pub no_estimate: bool,
+
     /// Print one JSON object instead of the text report.
     #[arg(long)]
     pub json: bool,

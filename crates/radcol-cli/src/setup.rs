@@ -163,6 +163,7 @@ pub fn setup(p: &ProblemSpec, level: Option<u32>, max_edge: Option<f64>) -> Resu
         quad: p.quad.clone(),
         check_memory: true,
         max_edge,
+        estimate: p.estimate,
         progress: None,
     };
     Ok(Setup {

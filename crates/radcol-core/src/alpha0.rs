@@ -32,8 +32,23 @@ pub struct Alpha0Report {
     /// Roots of the defect on s^(r+1) that were rejected, with the largest
     /// relative defect on the other monomials there.
     pub rejected_roots: Vec<(f64, f64)>,
+    /// Every α in (0, 1/3) at which the rule gains a degree of precision
+    /// (all degree-(r+1) defects vanish), with the Lebesgue constant of its
+    /// nodes: for odd r these are the α0 of Theorem 7; for even r they keep
+    /// the one-triangle precision r + 1 that symmetric pairs would otherwise
+    /// supply (Lemma 8), which matters on locally refined, unsymmetric meshes.
+    pub roots: Vec<AlphaRoot>,
     /// One sentence saying what was found and why.
     pub reason: String,
+}
+
+/// An α that lifts the rule's precision, and how well its nodes interpolate.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct AlphaRoot {
+    /// The node parameter.
+    pub alpha: f64,
+    /// The Lebesgue constant max_σ Σ_j |l_j| of its nodes.
+    pub lebesgue: f64,
 }
 
 /// A defect this small (relative to the monomial's integral) counts as zero.
@@ -62,6 +77,7 @@ pub fn find_alpha0(r: usize) -> Alpha0Report {
             best_defect: 0.0,
             precision_at_best: 1,
             rejected_roots: vec![],
+            roots: vec![],
             reason: "r = 0 has the single centroid node, which does not depend on α (its rule already has degree 1 = r + 1).".into(),
         };
     }
@@ -104,11 +120,26 @@ pub fn find_alpha0(r: usize) -> Alpha0Report {
         grid[ibest.saturating_sub(1)],
         grid[(ibest + 1).min(SAMPLES)],
     );
-    if let Some(&(a, d)) = accepted.iter().min_by(|x, y| x.1.total_cmp(&y.1)) {
-        best_alpha = a;
-        best_defect = d;
-    } else if best_defect <= ZERO_DEFECT {
+    if accepted.is_empty() && best_defect <= ZERO_DEFECT {
         accepted.push((best_alpha, best_defect));
+    }
+    let lebesgue = |a: f64| {
+        NodeSet::new(r, a)
+            .map(|s| s.lebesgue_constant())
+            .unwrap_or(f64::INFINITY)
+    };
+    let mut roots: Vec<AlphaRoot> = accepted
+        .iter()
+        .map(|&(alpha, _)| AlphaRoot {
+            alpha,
+            lebesgue: lebesgue(alpha),
+        })
+        .collect();
+    // The best conditioned root first: it is the one "auto" takes.
+    roots.sort_by(|a, b| a.lebesgue.total_cmp(&b.lebesgue));
+    if let Some(first) = roots.first() {
+        best_alpha = first.alpha;
+        best_defect = max_abs(&relative_defects(r, best_alpha));
     }
     let precision_at_best = NodeSet::new(r, best_alpha)
         .map(|s| s.precision())
@@ -116,7 +147,7 @@ pub fn find_alpha0(r: usize) -> Alpha0Report {
 
     let (alpha0, reason) = verdict(
         r,
-        &accepted,
+        &roots,
         &rejected_roots,
         best_alpha,
         best_defect,
@@ -129,34 +160,57 @@ pub fn find_alpha0(r: usize) -> Alpha0Report {
         best_defect,
         precision_at_best,
         rejected_roots,
+        roots,
         reason,
     }
 }
 
-/// α0 and the sentence that says what the search found: none for even r;
-/// the first accepted root for odd r; else the rejected roots as evidence.
+/// α0 and the sentence that says what the search found: for even r the
+/// precision-lifting roots (none is an α0); for odd r the best conditioned
+/// accepted root; else the rejected roots as evidence.
 fn verdict(
     r: usize,
-    accepted: &[(f64, f64)],
+    roots: &[AlphaRoot],
     rejected_roots: &[(f64, f64)],
     best_alpha: f64,
     best_defect: f64,
     precision_at_best: usize,
 ) -> (Option<f64>, String) {
+    let listed = roots
+        .iter()
+        .map(|x| format!("α = {:.12} (Lebesgue constant {:.2})", x.alpha, x.lebesgue))
+        .collect::<Vec<_>>()
+        .join(", ");
     if r.is_multiple_of(2) {
+        let lifted = if roots.is_empty() {
+            format!(
+                "the α minimising the degree-{} defect is {best_alpha:.15}, leaving a relative defect of {best_defect:.3e}",
+                r + 1
+            )
+        } else {
+            format!(
+                "the rule reaches degree {} on one triangle at {listed}; auto takes the first, the best conditioned",
+                r + 1
+            )
+        };
         (
             None,
             format!(
-                "α0 is defined for odd r (Theorem 7); for even r = {r} the node error is O(h^{}) for every α (Theorem 9). The α minimising the degree-{} defect is {best_alpha:.15}, leaving a relative defect of {best_defect:.3e}.",
+                "α0 is defined for odd r (Theorem 7); for even r = {r} the node error is O(h^{}) for every α on symmetric meshes (Theorem 9); {lifted}.",
                 r + 2,
-                r + 1
             ),
         )
-    } else if let Some(&(a, d)) = accepted.first() {
+    } else if let Some(first) = roots.first() {
+        let others = if roots.len() > 1 {
+            format!(" Roots: {listed}; auto takes the best conditioned.")
+        } else {
+            String::new()
+        };
         (
-            Some(a),
+            Some(first.alpha),
             format!(
-                "At α0 = {a:.16} the interpolatory rule integrates every monomial of degree {} to a relative defect of {d:.1e}: its degree of precision rises from {r} to {precision_at_best}.",
+                "At α0 = {:.16} the interpolatory rule integrates every monomial of degree {} to a relative defect of {best_defect:.1e}: its degree of precision rises from {r} to {precision_at_best}.{others}",
+                first.alpha,
                 r + 1
             ),
         )
@@ -179,13 +233,15 @@ fn verdict(
 }
 
 impl Alpha0Report {
-    /// The α that "auto" uses: α0 when it exists, else the defect minimiser
-    /// (for r = 0 any α; we return 0.1, which the centroid node ignores).
+    /// The α that "auto" uses: of the α that lift the rule's precision (α0
+    /// for odd r), the one whose nodes have the smallest Lebesgue constant;
+    /// else the defect minimiser (for r = 0 any α; we return 0.1, which the
+    /// centroid node ignores).
     pub fn auto_alpha(&self) -> f64 {
         if self.degree == 0 {
             return 0.1;
         }
-        self.alpha0.unwrap_or(self.best_alpha)
+        self.roots.first().map_or(self.best_alpha, |x| x.alpha)
     }
 }
 
@@ -280,6 +336,29 @@ mod tests {
         assert_eq!(set.precision(), 4);
         // Away from α0 the rule has degree 3 only.
         assert_eq!(NodeSet::new(3, a + 0.01).unwrap().precision(), 3);
+    }
+
+    /// r = 2: the rule gains degree 3 at two α; auto takes the one whose nodes
+    /// interpolate better (Lebesgue constant ≈ 4.4 against ≈ 32), and every
+    /// reported root lifts the precision (checked on the monomials).
+    #[test]
+    fn auto_alpha_of_degree_two_is_the_best_conditioned_root() {
+        let rep = find_alpha0(2);
+        assert!(rep.roots.len() >= 2, "{:?}", rep.roots);
+        for root in &rep.roots {
+            assert_eq!(NodeSet::new(2, root.alpha).unwrap().precision(), 3);
+            let lambda = NodeSet::new(2, root.alpha).unwrap().lebesgue_constant();
+            crate::assert_close!(root.lebesgue, lambda, 1e-12);
+        }
+        let auto = rep.auto_alpha();
+        let min = rep
+            .roots
+            .iter()
+            .min_by(|a, b| a.lebesgue.total_cmp(&b.lebesgue))
+            .unwrap();
+        assert_eq!(auto, min.alpha);
+        assert!(min.lebesgue < 5.0 && auto < 0.15, "{min:?}");
+        assert!(rep.alpha0.is_none(), "no α0 for even r");
     }
 
     /// r = 5: two symmetric invariants of degree 6 must vanish at once; the report

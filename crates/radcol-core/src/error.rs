@@ -72,6 +72,12 @@ pub enum InputError {
         /// The length asked for.
         value: f64,
     },
+    /// A target error outside (0, 1).
+    #[error("target error {value} must lie in (0, 1): it is the max error relative to max |u|")]
+    TargetError {
+        /// The target asked for.
+        value: f64,
+    },
     /// A curved surface that may occlude itself: radcol clips flat elements only.
     #[error("surface '{surface}': patch '{patch}' is curved and the surface is not known to bound a convex set; radcol models occlusion between flat triangles only (set Surface::convex_enclosure when the surface does bound a convex set)")]
     CurvedOcclusion {

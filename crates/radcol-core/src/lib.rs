@@ -63,6 +63,7 @@ pub mod backend;
 pub mod camera;
 pub mod discretization;
 pub mod error;
+pub mod estimate;
 pub mod expr;
 pub mod geometry;
 pub mod kernel;

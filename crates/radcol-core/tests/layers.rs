@@ -27,6 +27,7 @@ const LAYERS: &[&str] = &[
     "problem",
     "solution",
     "norms",
+    "estimate",
     "run",
     "study",
     "render",

@@ -2,6 +2,7 @@
 
 use super::alpha_text;
 use crate::setup::Alpha;
+use radcol_core::alpha0::AlphaRoot;
 use radcol_core::nodes::NodeSet;
 use serde::Serialize;
 use std::fmt;
@@ -33,6 +34,7 @@ pub struct NodesReport {
     best_defect: f64,
     precision_at_best: usize,
     rejected_roots: Vec<(f64, f64)>,
+    roots: Vec<AlphaRoot>,
 }
 
 impl NodesReport {
@@ -60,6 +62,7 @@ impl NodesReport {
             best_defect: a0.best_defect,
             precision_at_best: a0.precision_at_best,
             rejected_roots: a0.rejected_roots.clone(),
+            roots: a0.roots.clone(),
         }
     }
 }

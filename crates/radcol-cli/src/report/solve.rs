@@ -4,6 +4,7 @@
 use super::{alpha_text, sci, secs, ProblemText};
 use crate::setup::Setup;
 use radcol_core::assembly::{BackendInfo, VisibilityMode};
+use radcol_core::estimate::ErrorEstimate;
 use radcol_core::norms::ErrorNorms;
 use radcol_core::run::{SolveOutcome, SolverKind, SolverReport, Timings};
 use radcol_core::visibility::VisibilityAnalysis;
@@ -70,6 +71,9 @@ pub struct ChannelReport {
     integral_u: f64,
     integral_e: f64,
     errors: Option<ErrorNorms>,
+    estimate: Option<ErrorEstimate>,
+    /// Estimated over true global max error, when both are known.
+    effectivity: Option<f64>,
 }
 
 /// What a scene with materials holds, for the text report.
@@ -174,6 +178,13 @@ impl SolveReport {
                     integral_u: c.integral_u,
                     integral_e: c.integral_e,
                     errors: c.errors,
+                    estimate: c.estimate.clone(),
+                    effectivity: match (&c.errors, &c.estimate) {
+                        (Some(e), Some(est)) if e.global_max > 0.0 => {
+                            Some(est.max / e.global_max)
+                        }
+                        _ => None,
+                    },
                 })
                 .collect(),
             out: written.to_vec(),
@@ -251,9 +262,41 @@ impl SolveReport {
                     "              errors: - (give --exact EXPR to measure them)"
                 )?,
             }
+            if let Some(e) = &ch.estimate {
+                fmt_estimate(f, e, ch.effectivity)?;
+            }
         }
         Ok(())
     }
+}
+
+/// The estimate's line(s) of one channel.
+fn fmt_estimate(f: &mut fmt::Formatter<'_>, e: &ErrorEstimate, eff: Option<f64>) -> fmt::Result {
+    writeln!(
+        f,
+        "              estimated error: max {} of max|u| = {}, rms {}{}",
+        sci(e.max_rel),
+        sci(e.scale),
+        sci(e.rms_rel),
+        eff.map(|x| format!(" (estimate / true global max = {x:.2})"))
+            .unwrap_or_default()
+    )?;
+    let negative = e.negative_nodes + e.negative_points;
+    if negative > 0 {
+        writeln!(
+            f,
+            "              negative u_n at {} nodes and {} lattice points (min {}){}",
+            e.negative_nodes,
+            e.negative_points,
+            sci(e.min_value),
+            if e.nonnegative_problem {
+                ": unphysical (E, ρ ≥ 0), counted as error"
+            } else {
+                ""
+            }
+        )?;
+    }
+    Ok(())
 }
 
 impl fmt::Display for SolveReport {
@@ -300,12 +343,13 @@ impl fmt::Display for SolveReport {
         let t = &self.timings;
         writeln!(
             f,
-            "  timings     mesh {}, rhs {}, assembly {}, solve {}, errors {}, total {}",
+            "  timings     mesh {}, rhs {}, assembly {}, solve {}, errors {}, estimate {}, total {}",
             secs(t.mesh_s),
             secs(t.rhs_s),
             secs(t.assembly_s),
             secs(t.solve_s),
             secs(t.errors_s),
+            secs(t.estimate_s),
             secs(t.total_s)
         )?;
         self.fmt_channels(f)?;

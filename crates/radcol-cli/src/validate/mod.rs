@@ -69,6 +69,8 @@ pub struct ProblemSpec {
     pub backend: BackendChoice,
     /// Device precision.
     pub precision: Precision,
+    /// Estimate the error after the solve.
+    pub estimate: bool,
     /// JSON instead of text.
     pub json: bool,
 }
@@ -294,6 +296,7 @@ fn problem(p: &ProblemArgs) -> Result<ProblemSpec> {
         },
         backend,
         precision,
+        estimate: !p.no_estimate,
         json: p.json,
     })
 }

@@ -153,6 +153,50 @@ pub fn room_with_cube() -> Surface {
     }
 }
 
+/// A receiving floor, the square [-1, 1]² of z = 0 facing up (+z), lit by a
+/// convex polygonal `emitter` through a convex polygonal `occluder`, both
+/// horizontal, above the floor and facing down: the shadowed family whose
+/// direct light has a closed form (Lambert's contour formula on the part of
+/// the emitter each floor point sees). Polygons are fanned from their first
+/// vertex; patches are named "floor", "emitter" and "occluder", in that order.
+pub fn floor_under_occluder(emitter: &[DVec3], occluder: &[DVec3]) -> Surface {
+    let facing_down = |poly: &[DVec3]| -> Vec<[DVec3; 3]> {
+        (1..poly.len() - 1)
+            .map(|i| {
+                let t = [poly[0], poly[i], poly[i + 1]];
+                if (t[1] - t[0]).cross(t[2] - t[0]).z > 0.0 {
+                    [t[0], t[2], t[1]]
+                } else {
+                    t
+                }
+            })
+            .collect()
+    };
+    let floor = [
+        DVec3::new(-1.0, -1.0, 0.0),
+        DVec3::new(1.0, -1.0, 0.0),
+        DVec3::new(1.0, 1.0, 0.0),
+        DVec3::new(-1.0, 1.0, 0.0),
+    ];
+    let patch = |name: &str, triangles| Patch {
+        name: name.into(),
+        map: Arc::new(Identity),
+        triangles,
+    };
+    Surface {
+        name: "floor under occluder".into(),
+        patches: vec![
+            patch(
+                "floor",
+                vec![[floor[0], floor[1], floor[2]], [floor[0], floor[2], floor[3]]],
+            ),
+            patch("emitter", facing_down(emitter)),
+            patch("occluder", facing_down(occluder)),
+        ],
+        convex_enclosure: false,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -35,6 +35,9 @@ pub struct SolveConfig {
     /// After the uniform `level`, refine elements 4:1 until every mapped edge
     /// is at most this long (scene units); None: uniform refinement only.
     pub max_edge: Option<f64>,
+    /// Estimate the error of every channel after the solve
+    /// ([`crate::estimate`]): about as much work again as the assembly.
+    pub estimate: bool,
     /// Progress observer (assembly row blocks, channels solved), if any.
     pub progress: Option<ProgressHandle>,
 }
@@ -50,6 +53,7 @@ impl Default for SolveConfig {
             quad: QuadratureOptions::default(),
             check_memory: true,
             max_edge: None,
+            estimate: true,
             progress: None,
         }
     }

@@ -12,6 +12,7 @@
 //!
 //! [`solve`] runs them all; [`crate::study::study`] repeats it over levels.
 
+pub mod adapt;
 mod config;
 mod outcome;
 mod pipeline;
@@ -19,5 +20,5 @@ mod size;
 
 pub use config::{SolveConfig, SolverKind};
 pub use outcome::{ChannelResult, SolveOutcome, SolverReport, Timings};
-pub use pipeline::{check_size, discretize, solve, true_residual};
+pub use pipeline::{check_size, discretize, solve, solve_on_mesh, true_residual};
 pub use size::{available_memory, elements, mesh_size, MemoryEstimate, MeshSize};

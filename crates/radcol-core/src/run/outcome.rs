@@ -4,6 +4,7 @@
 use super::SolverKind;
 use crate::assembly::{BackendInfo, PlanStats};
 use crate::discretization::Discretization;
+use crate::estimate::ErrorEstimate;
 use crate::matrix::DenseMatrix;
 use crate::norms::ErrorNorms;
 use crate::solution::Solution;
@@ -24,6 +25,8 @@ pub struct Timings {
     pub solve_s: f64,
     /// Error norms against the exact solution.
     pub errors_s: f64,
+    /// The error estimate (check plan, fill and contraction).
+    pub estimate_s: f64,
     /// Everything.
     pub total_s: f64,
 }
@@ -58,6 +61,8 @@ pub struct ChannelResult {
     pub integral_e: f64,
     /// Errors, when the exact solution is known.
     pub errors: Option<ErrorNorms>,
+    /// The a posteriori error estimate, when asked for.
+    pub estimate: Option<ErrorEstimate>,
 }
 
 /// Everything a solve produced.

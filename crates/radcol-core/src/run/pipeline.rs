@@ -5,6 +5,7 @@ use super::{ChannelResult, SolveConfig, SolveOutcome, SolverKind, SolverReport, 
 use crate::assembly::{Assembled, AssemblyBackend, AssemblyPlan};
 use crate::discretization::Discretization;
 use crate::error::{Error, InputError};
+use crate::estimate::{check_nodes, estimate, ChannelFields};
 use crate::mesh::Mesh;
 use crate::nodes::NodeSet;
 use crate::norms::error_norms;
@@ -112,15 +113,19 @@ fn solve_channels(
     disc: &Arc<Discretization>,
     matrix: &crate::matrix::DenseMatrix,
     fields: Vec<NodalFields>,
+    guess: Option<&[Vec<f64>]>,
 ) -> Result<Vec<ChannelResult>, Error> {
     let mut channels = Vec::new();
     let mut lu_cache: Option<(Vec<f64>, DenseLu)> = None;
     if let Some(p) = &cfg.progress {
         p.start("solve", problem.channels.len() as u64);
     }
-    for (ch, (rho, emission)) in problem.channels.iter().zip(fields) {
+    for (c, (ch, (rho, emission))) in problem.channels.iter().zip(fields).enumerate() {
         let op = RadiosityOperator::new(matrix, &rho)?;
-        let mut x = emission.clone();
+        let mut x = match guess.and_then(|g| g.get(c)) {
+            Some(g) if g.len() == emission.len() => g.clone(),
+            _ => emission.clone(),
+        };
         let iterations = match cfg.solver {
             SolverKind::Gmres => gmres(&op, &emission, &mut x, &cfg.gmres)?.iterations,
             SolverKind::Lu => {
@@ -148,6 +153,7 @@ fn solve_channels(
                 residual,
             },
             errors: None,
+            estimate: None,
         });
         if let Some(p) = &cfg.progress {
             p.advance(1);
@@ -177,6 +183,39 @@ fn assemble(
     Ok((plan, assembled))
 }
 
+/// Estimates every channel's error at the check points of its mesh
+/// ([`crate::estimate`]), with the solve's quadrature and visibility.
+fn estimate_channels(
+    problem: &Problem,
+    cfg: &SolveConfig,
+    visibility: &VisibilityAnalysis,
+    channels: &mut [ChannelResult],
+) -> Result<(), Error> {
+    let Some(first) = channels.first() else {
+        return Ok(());
+    };
+    let disc = first.solution.discretization();
+    let nodes = check_nodes(disc.nodes().degree(), disc.nodes().alpha());
+    let check = Arc::new(Discretization::new(disc.mesh().clone(), nodes));
+    let check_fields = fields(&check, problem)?;
+    let plan = AssemblyPlan::with_progress(check, cfg.quad.clone(), visibility, None);
+    let inputs: Vec<ChannelFields<'_>> = channels
+        .iter()
+        .zip(&check_fields)
+        .map(|(ch, (rho, emission))| ChannelFields {
+            solution: &ch.solution,
+            rho,
+            emission,
+            emission_nodes: &ch.emission,
+        })
+        .collect();
+    let estimates = estimate(&plan, &inputs);
+    for (ch, e) in channels.iter_mut().zip(estimates) {
+        ch.estimate = Some(e);
+    }
+    Ok(())
+}
+
 /// Solves `problem` with `cfg`, assembling on `backend`.
 pub fn solve(
     problem: &Problem,
@@ -187,6 +226,43 @@ pub fn solve(
     let visibility = visibility::analyze(&problem.surface);
     visibility.check_supported()?;
     let disc = discretize(problem, cfg)?;
+    solve_discretized(problem, cfg, disc, backend, &visibility, None, t0)
+}
+
+/// Solves `problem` on a mesh built by the caller (a locally refined one, for
+/// example: see [`super::adapt`]), with `guess` (one vector of N values per
+/// channel) as GMRES's starting point when given. `cfg`'s degree and α set
+/// the nodes; its level and max edge are not used.
+pub fn solve_on_mesh(
+    problem: &Problem,
+    cfg: &SolveConfig,
+    mesh: Arc<Mesh>,
+    backend: &dyn AssemblyBackend,
+    guess: Option<&[Vec<f64>]>,
+) -> Result<SolveOutcome, Error> {
+    let t0 = Instant::now();
+    let visibility = visibility::analyze(&problem.surface);
+    visibility.check_supported()?;
+    let nodes = NodeSet::new(cfg.degree, cfg.alpha)?;
+    let unknowns = (mesh.len() * nodes.len()) as u64;
+    if cfg.check_memory {
+        MemoryEstimate::new(unknowns).check(cfg.solver)?;
+    }
+    let disc = Arc::new(Discretization::new(mesh, nodes));
+    solve_discretized(problem, cfg, disc, backend, &visibility, guess, t0)
+}
+
+/// The stages after the discretization.
+fn solve_discretized(
+    problem: &Problem,
+    cfg: &SolveConfig,
+    disc: Arc<Discretization>,
+    backend: &dyn AssemblyBackend,
+    visibility: &VisibilityAnalysis,
+    guess: Option<&[Vec<f64>]>,
+    t0: Instant,
+) -> Result<SolveOutcome, Error> {
+    let visibility = visibility.clone();
     let h = disc.mesh().h();
     let mesh_s = t0.elapsed().as_secs_f64();
 
@@ -199,7 +275,7 @@ pub fn solve(
     let assembly_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let mut channels = solve_channels(problem, cfg, &disc, &assembled.matrix, fields)?;
+    let mut channels = solve_channels(problem, cfg, &disc, &assembled.matrix, fields, guess)?;
     let solve_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
@@ -207,6 +283,12 @@ pub fn solve(
         first.errors = Some(error_norms(&first.solution, exact));
     }
     let errors_s = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    if cfg.estimate {
+        estimate_channels(problem, cfg, &visibility, &mut channels)?;
+    }
+    let estimate_s = t.elapsed().as_secs_f64();
 
     Ok(SolveOutcome {
         h,
@@ -224,6 +306,7 @@ pub fn solve(
             assembly_s,
             solve_s,
             errors_s,
+            estimate_s,
             total_s: t0.elapsed().as_secs_f64(),
         },
     })

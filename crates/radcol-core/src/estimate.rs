@@ -1,0 +1,261 @@
+//! A posteriori error estimate of a collocation solution, from what the
+//! method already has: the residual of the equation at points that are not
+//! collocation nodes,
+//!
+//! ```text
+//! η(P) = û_n(P) - u_n(P) = E(P) + ρ(P)/π ∫_S G(P, Q) V(P, Q) u_n(Q) dS_Q - u_n(P),
+//! ```
+//!
+//! the iterated solution (21) minus u_n. u - u_n = (u - û_n) + η, and u - û_n
+//! = K(u - u_n) is of higher order than u - u_n wherever K smooths (on smooth
+//! surfaces û_n superconverges, Theorems 7 and 9), so η tracks the error; at
+//! the nodes η vanishes by construction, hence the check points.
+//!
+//! **Check points.** Per element, the nodes q_ij(α_c) of degree r + 1 with a
+//! small α_c ([`check_nodes`]). Through them η is interpolated on each
+//! element, which holds the leading (degree r + 1) term of u - u_n, and that
+//! interpolant is sampled everywhere on the element, vertices and edges
+//! included, where u - u_n is largest. u_n, a polynomial of degree r on
+//! each element, is written exactly in their Lagrange basis, so K u_n at the
+//! check points is one row block of an ordinary [`AssemblyPlan`] over those
+//! points, with the plan's visibility (partly visible pairs clipped exactly)
+//! and quadrature: η is the collocation residual on the check points. The
+//! blocks are filled and contracted one at a time (memory O(f·N), not N²).
+//!
+//! **Negative light.** With E ≥ 0 and ρ ≥ 0 the exact u is ≥ 0, so a
+//! negative u_n at a node or check point is an error at least |u_n| there:
+//! it is counted and, on such problems, taken into the element's estimate.
+
+use crate::assembly::{AssemblyPlan, FillMode};
+use crate::discretization::Discretization;
+use crate::nodes::{NodeSet, MAX_DEGREE};
+use crate::norms::LATTICE;
+use crate::quadrature::RuleLadder;
+use crate::solution::Solution;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// α of the check points (and the alternative when the solution's own α is
+/// too close to it for the points to differ from the nodes).
+const CHECK_ALPHA: [f64; 2] = [0.05, 0.12];
+
+/// The check-point node set for a solution of degree `r` with node
+/// parameter `alpha`: degree r + 1 (capped at [`MAX_DEGREE`]), so that the
+/// interpolant of η through them holds the leading, degree-(r+1) term of
+/// u - u_n, and an α that keeps their interpolation well conditioned and
+/// the points away from the nodes.
+pub fn check_nodes(r: usize, alpha: f64) -> NodeSet {
+    let rc = (r + 1).min(MAX_DEGREE);
+    // The corner nodes (α, α), … of every degree coincide for equal α.
+    let a = if (alpha - CHECK_ALPHA[0]).abs() < 0.03 {
+        CHECK_ALPHA[1]
+    } else {
+        CHECK_ALPHA[0]
+    };
+    NodeSet::new(rc, a).expect("check α inside (0, 1/3)")
+}
+
+/// The estimate of one channel's solution.
+#[derive(Clone, Debug, Serialize)]
+pub struct ErrorEstimate {
+    /// max |η| over S (η interpolated through each element's check
+    /// points, sampled on the lattice), absolute.
+    pub max: f64,
+    /// (∫_S η²)^½ of the same interpolant (absolute).
+    pub l2: f64,
+    /// max |u_n| over the nodes, check points and lattice points: the scale
+    /// of the relative figures.
+    pub scale: f64,
+    /// `max / scale`.
+    pub max_rel: f64,
+    /// Root mean square of η over S relative to `scale`:
+    /// l2 / (scale · |S|^½).
+    pub rms_rel: f64,
+    /// Nodes where u_n < 0.
+    pub negative_nodes: usize,
+    /// Lattice points (vertices, edges, interiors of every element; see
+    /// [`crate::norms::LATTICE`]) where u_n < 0.
+    pub negative_points: usize,
+    /// min u_n over the nodes, check points and lattice points.
+    pub min_value: f64,
+    /// Whether negative u_n is unphysical here (E ≥ 0 at every node and
+    /// check point; ρ ≥ 0 always): then it is part of the element estimates.
+    pub nonnegative_problem: bool,
+    /// Per element: max of |η| over its lattice (and of -u_n where negative
+    /// light is unphysical), absolute; length n.
+    #[serde(skip)]
+    pub elements: Vec<f64>,
+}
+
+impl ErrorEstimate {
+    /// Per element, `elements / scale`.
+    pub fn elements_rel(&self) -> impl Iterator<Item = f64> + '_ {
+        let s = if self.scale > 0.0 { self.scale } else { 1.0 };
+        self.elements.iter().map(move |e| e / s)
+    }
+}
+
+/// What the estimate of one channel needs: u_n, and ρ and E at the check
+/// points (ordered like `check.discretization().points()`).
+#[derive(Debug)]
+pub struct ChannelFields<'a> {
+    /// The solution.
+    pub solution: &'a Solution,
+    /// ρ at the check points.
+    pub rho: &'a [f64],
+    /// E at the check points.
+    pub emission: &'a [f64],
+    /// E at the solution's nodes (for the sign of the problem).
+    pub emission_nodes: &'a [f64],
+}
+
+/// The estimate of every channel, with `check` the plan over the check
+/// points ([`check_nodes`] on the solutions' mesh).
+pub fn estimate(check: &AssemblyPlan, channels: &[ChannelFields<'_>]) -> Vec<ErrorEstimate> {
+    let disc = check.discretization();
+    let n = disc.mesh().len();
+    let fc = disc.nodes_per_element();
+    let nc = disc.len();
+    // u_n at the check points: its coefficients in the check basis.
+    let coeffs: Vec<Vec<f64>> = channels
+        .iter()
+        .map(|ch| {
+            disc.points()
+                .par_iter()
+                .map(|p| ch.solution.eval(p.element, p.st[0], p.st[1]))
+                .collect()
+        })
+        .collect();
+    // η at every check point, channel-major within each element's block.
+    let eta: Vec<Vec<f64>> = (0..n)
+        .into_par_iter()
+        .map_init(
+            || vec![0.0; fc * nc],
+            |block, kp| {
+                check.fill_block(kp, block, FillMode::All);
+                let mut out = Vec::with_capacity(channels.len() * fc);
+                for (ch, c) in channels.iter().zip(&coeffs) {
+                    for a in 0..fc {
+                        let i = kp * fc + a;
+                        let row = &block[a * nc..(a + 1) * nc];
+                        let ku: f64 = row.iter().zip(c).map(|(g, u)| g * u).sum();
+                        out.push(ch.emission[i] + ch.rho[i] * ku - c[i]);
+                    }
+                }
+                out
+            },
+        )
+        .collect();
+    channels
+        .iter()
+        .enumerate()
+        .map(|(ci, ch)| summarise(disc, ch, &coeffs[ci], |k, a| eta[k][ci * fc + a]))
+        .collect()
+}
+
+/// Norms, signs and per-element figures of one channel's η. On each
+/// element η is interpolated through its check points (degree r + 1) and
+/// the interpolant's maximum taken over the lattice of [`norms`]
+/// (vertices, edges and interior: u - u_n peaks at the vertices mostly,
+/// where there are no check points) and its square integrated.
+///
+/// [`norms`]: crate::norms
+fn summarise(
+    disc: &Discretization,
+    ch: &ChannelFields<'_>,
+    coeffs: &[f64],
+    eta: impl Fn(usize, usize) -> f64,
+) -> ErrorEstimate {
+    let mesh = disc.mesh();
+    let check = disc.nodes();
+    let fc = check.len();
+    let nodal = ch.solution.nodal();
+    let nonneg = ch.emission.iter().chain(ch.emission_nodes).all(|&e| e >= 0.0);
+    let lattice: Vec<[f64; 2]> = (0..=LATTICE)
+        .flat_map(|a| (0..=LATTICE - a).map(move |b| [a, b]))
+        .map(|[a, b]| [a as f64 / LATTICE as f64, b as f64 / LATTICE as f64])
+        .collect();
+    let ladder = RuleLadder::new();
+    let rule = ladder.rule(2 * check.degree());
+    let mut l = vec![0.0; fc];
+    let mut interp = |k: usize, st: [f64; 2]| {
+        check.eval_basis(st[0], st[1], &mut l);
+        let e: f64 = (0..fc).map(|a| l[a] * eta(k, a)).sum();
+        (e, ch.solution.eval(k, st[0], st[1]))
+    };
+    let mut elements = vec![0.0f64; mesh.len()];
+    let (mut max, mut l2sq, mut scale) = (0.0f64, 0.0, 0.0f64);
+    let (mut min_value, mut negative_points) = (f64::INFINITY, 0);
+    for (k, elem) in elements.iter_mut().enumerate() {
+        let mut e_max = 0.0f64;
+        let mut most_negative = 0.0f64;
+        for &st in &lattice {
+            let (e, u) = interp(k, st);
+            e_max = e_max.max(e.abs());
+            scale = scale.max(u.abs());
+            min_value = min_value.min(u);
+            if u < 0.0 {
+                negative_points += 1;
+                most_negative = most_negative.max(-u);
+            }
+        }
+        for (&st, &w) in rule.points.iter().zip(&rule.weights) {
+            let (e, _) = interp(k, st);
+            l2sq += w * mesh.point(k, st[0], st[1]).jacobian * e * e;
+        }
+        max = max.max(e_max);
+        *elem = if nonneg {
+            e_max.max(most_negative)
+        } else {
+            e_max
+        };
+    }
+    for &u in nodal.iter().chain(coeffs) {
+        scale = scale.max(u.abs());
+        min_value = min_value.min(u);
+    }
+    let area = mesh.area();
+    let s = if scale > 0.0 { scale } else { 1.0 };
+    ErrorEstimate {
+        max,
+        l2: l2sq.sqrt(),
+        scale,
+        max_rel: max / s,
+        rms_rel: (l2sq / area).sqrt() / s,
+        negative_nodes: nodal.iter().filter(|&&u| u < 0.0).count(),
+        negative_points,
+        min_value,
+        nonnegative_problem: nonneg,
+        elements,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The check points are never the nodes, for any degree and α.
+    #[test]
+    fn check_points_differ_from_the_nodes() {
+        for r in 0..=crate::nodes::MAX_DEGREE {
+            for alpha in [0.01, 0.05, 0.06, 0.1, 0.1666, 0.25, 0.33] {
+                let nodes = NodeSet::new(r, alpha).unwrap();
+                let check = check_nodes(r, alpha);
+                                let close = check
+                    .points()
+                    .iter()
+                    .filter(|c| {
+                        nodes
+                            .points()
+                            .iter()
+                            .any(|q| (q[0] - c[0]).hypot(q[1] - c[1]) < 1e-3)
+                    })
+                    .count();
+                // Only the centroid may coincide (it is a node of every
+                // degree divisible by 3).
+                assert!(check.degree() == (r + 1).min(MAX_DEGREE));
+                assert!(close <= 1, "r = {r}, α = {alpha}: {close} check points on nodes");
+            }
+        }
+    }
+}

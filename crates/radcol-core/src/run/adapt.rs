@@ -1,0 +1,338 @@
+//! Adaptive refinement to a tolerance: solve, estimate ([`crate::estimate`]),
+//! split the elements whose estimate is large 4:1, solve again, until the
+//! estimated max error relative to max |u_n| is below the target or a budget
+//! stops it.
+//!
+//! The collocation space is discontinuous, so an element is split without
+//! its neighbours (hanging vertices are harmless to the method); children
+//! replace their parent in place, which keeps the elements of a base
+//! triangle consecutive and in refinement order (what the occlusion walk
+//! reads). Each new solve starts GMRES from the previous solution evaluated
+//! at the new nodes.
+
+use super::pipeline::solve_on_mesh;
+use super::size::MemoryEstimate;
+use super::{discretize, SolveConfig, SolveOutcome};
+use crate::assembly::AssemblyBackend;
+use crate::error::{Error, InputError};
+use crate::geometry::barycentric_st;
+use crate::mesh::Mesh;
+use crate::problem::Problem;
+use serde::Serialize;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// What the adaptive loop aims for and may spend.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct AdaptOptions {
+    /// Target of the estimated max error relative to max |u_n|, per
+    /// channel, in (0, 1).
+    pub target: f64,
+    /// No step with more unknowns than this (None: as many as the dense
+    /// matrix's memory allows).
+    pub max_unknowns: Option<u64>,
+    /// At most this many solves.
+    pub max_steps: usize,
+    /// Elements whose estimate exceeds `mark_fraction · target` are split:
+    /// below 1, elements about to cross the target are split in the same
+    /// step (fewer solves for a few more unknowns).
+    pub mark_fraction: f64,
+}
+
+impl Default for AdaptOptions {
+    fn default() -> Self {
+        Self {
+            target: 1e-2,
+            max_unknowns: None,
+            max_steps: 25,
+            mark_fraction: 0.5,
+        }
+    }
+}
+
+impl AdaptOptions {
+    /// Refuses a target outside (0, 1) and a zero budget.
+    pub fn check(&self) -> Result<(), InputError> {
+        if !(self.target > 0.0 && self.target < 1.0) {
+            return Err(InputError::TargetError {
+                value: self.target,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Why the loop stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// The estimate is below the target.
+    Reached,
+    /// The next step would exceed the unknowns budget.
+    MaxUnknowns,
+    /// The next step's dense matrix would not fit in memory.
+    Memory,
+    /// The step limit was reached.
+    MaxSteps,
+}
+
+impl std::fmt::Display for StopReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            StopReason::Reached => "the estimate is below the target",
+            StopReason::MaxUnknowns => "the next step would exceed the unknowns budget",
+            StopReason::Memory => "the next step's dense matrix would not fit in memory",
+            StopReason::MaxSteps => "the step limit was reached",
+        })
+    }
+}
+
+/// One solve of the loop.
+#[derive(Clone, Debug, Serialize)]
+pub struct AdaptStep {
+    /// Elements.
+    pub elements: usize,
+    /// Unknowns N.
+    pub unknowns: usize,
+    /// Estimated max error relative to max |u_n| (worst channel).
+    pub estimate: f64,
+    /// Estimated rms error relative to max |u_n| (worst channel).
+    pub estimate_rms: f64,
+    /// True global max error, when the exact solution is known (first channel).
+    pub true_error: Option<f64>,
+    /// Elements split after this step (0 on the last).
+    pub split: usize,
+    /// Wall seconds of the solve, estimate included.
+    pub seconds: f64,
+}
+
+/// The last solve and how the loop got there.
+#[derive(Debug)]
+pub struct AdaptOutcome {
+    /// The final solve (its outputs are what to write).
+    pub outcome: SolveOutcome,
+    /// Every step, in order.
+    pub steps: Vec<AdaptStep>,
+    /// Why it stopped.
+    pub stop: StopReason,
+}
+
+/// Solves `problem` from the mesh `cfg` describes, refining where the
+/// estimate is large until `opts.target` or a budget; `on_step` sees each
+/// step as it ends.
+pub fn solve_adaptive(
+    problem: &Problem,
+    cfg: &SolveConfig,
+    opts: &AdaptOptions,
+    backend: &dyn AssemblyBackend,
+    mut on_step: impl FnMut(&AdaptStep),
+) -> Result<AdaptOutcome, Error> {
+    opts.check()?;
+    let cfg = SolveConfig {
+        estimate: true,
+        ..cfg.clone()
+    };
+    let mut mesh = discretize(problem, &cfg)?.mesh().clone();
+    let f = crate::nodes::nodes_per_element(cfg.degree);
+    let mut guess: Option<Vec<Vec<f64>>> = None;
+    let mut steps = Vec::new();
+    loop {
+        let t = Instant::now();
+        let out = solve_on_mesh(problem, &cfg, mesh.clone(), backend, guess.as_deref())?;
+        let indicator = indicators(&out);
+        let (estimate, estimate_rms) = worst(&out);
+        let mut step = AdaptStep {
+            elements: mesh.len(),
+            unknowns: out.discretization.len(),
+            estimate,
+            estimate_rms,
+            true_error: out.channels.first().and_then(|c| {
+                let scale = c.estimate.as_ref().map_or(1.0, |x| x.scale);
+                c.errors.map(|e| e.global_max / scale)
+            }),
+            split: 0,
+            seconds: t.elapsed().as_secs_f64(),
+        };
+        let stop = if estimate <= opts.target {
+            Some(StopReason::Reached)
+        } else if steps.len() + 1 >= opts.max_steps {
+            Some(StopReason::MaxSteps)
+        } else {
+            None
+        };
+        let marked = match stop {
+            Some(_) => Vec::new(),
+            None => mark(&indicator, opts.mark_fraction * opts.target),
+        };
+        let budget = budget(opts, &cfg, mesh.len(), f, marked.len());
+        let stop = stop.or(budget.err());
+        let split = budget.map_or(0, |m| m.min(marked.len()));
+        step.split = split;
+        on_step(&step);
+        steps.push(step);
+        if let Some(stop) = stop {
+            return Ok(AdaptOutcome {
+                outcome: out,
+                steps,
+                stop,
+            });
+        }
+        let (refined, parents) = refine(&mesh, &marked[..split]);
+        guess = Some(transfer(&out, &refined, &parents));
+        mesh = Arc::new(refined);
+    }
+}
+
+/// Per element, the worst channel's estimate relative to its max |u_n|.
+fn indicators(out: &SolveOutcome) -> Vec<f64> {
+    let n = out.discretization.mesh().len();
+    let mut ind = vec![0.0f64; n];
+    for ch in &out.channels {
+        if let Some(e) = &ch.estimate {
+            for (i, v) in ind.iter_mut().zip(e.elements_rel()) {
+                *i = i.max(v);
+            }
+        }
+    }
+    ind
+}
+
+/// The worst channel's relative max and rms estimates.
+fn worst(out: &SolveOutcome) -> (f64, f64) {
+    out.channels
+        .iter()
+        .filter_map(|c| c.estimate.as_ref())
+        .fold((0.0f64, 0.0f64), |(m, r), e| {
+            (m.max(e.max_rel), r.max(e.rms_rel))
+        })
+}
+
+/// The elements above `threshold`, worst first.
+fn mark(indicator: &[f64], threshold: f64) -> Vec<usize> {
+    let mut marked: Vec<usize> = (0..indicator.len())
+        .filter(|&k| indicator[k] > threshold)
+        .collect();
+    marked.sort_by(|&a, &b| indicator[b].total_cmp(&indicator[a]));
+    marked
+}
+
+/// How many of the `marked` elements may be split (each adds 3 elements of
+/// `f` unknowns), or why none may.
+fn budget(
+    opts: &AdaptOptions,
+    cfg: &SolveConfig,
+    elements: usize,
+    f: usize,
+    marked: usize,
+) -> Result<usize, StopReason> {
+    let fits_memory = |n: u64| !cfg.check_memory || MemoryEstimate::new(n).check(cfg.solver).is_ok();
+    let unknowns = |split: usize| ((elements + 3 * split) * f) as u64;
+    let allowed = |split: usize| {
+        opts.max_unknowns.is_none_or(|m| unknowns(split) <= m) && fits_memory(unknowns(split))
+    };
+    if marked == 0 || allowed(marked) {
+        return Ok(marked);
+    }
+    // The largest count that fits (the worst elements first).
+    let (mut lo, mut hi) = (0, marked);
+    while lo < hi {
+        let mid = (lo + hi).div_ceil(2);
+        if allowed(mid) {
+            lo = mid;
+        } else {
+            hi = mid - 1;
+        }
+    }
+    if lo > 0 {
+        return Ok(lo);
+    }
+    Err(if opts.max_unknowns.is_some_and(|m| unknowns(1) > m) {
+        StopReason::MaxUnknowns
+    } else {
+        StopReason::Memory
+    })
+}
+
+/// `mesh` with the elements `split` replaced in place by their four
+/// children, and each new element's parent in `mesh`.
+pub fn refine(mesh: &Mesh, split: &[usize]) -> (Mesh, Vec<usize>) {
+    let mut marked = vec![false; mesh.len()];
+    for &k in split {
+        marked[k] = true;
+    }
+    let mut elements = Vec::with_capacity(mesh.len() + 3 * split.len());
+    let mut parents = Vec::with_capacity(elements.capacity());
+    for (k, e) in mesh.elements().iter().enumerate() {
+        if marked[k] {
+            elements.extend(e.children());
+            parents.extend([k; 4]);
+        } else {
+            elements.push(*e);
+            parents.push(k);
+        }
+    }
+    let refined = Mesh::from_elements(mesh.surface().clone(), mesh.level(), elements);
+    (refined, parents)
+}
+
+/// The previous solution of every channel at the nodes of `refined`.
+fn transfer(out: &SolveOutcome, refined: &Mesh, parents: &[usize]) -> Vec<Vec<f64>> {
+    let disc = &out.discretization;
+    let old = disc.mesh();
+    let nodes = disc.nodes();
+    let mut at = Vec::with_capacity(refined.len() * nodes.len());
+    for (k, e) in refined.elements().iter().enumerate() {
+        let parent = &old.elements()[parents[k]];
+        let [a, b, c] = parent.param;
+        for &[s, t] in nodes.points() {
+            let st = barycentric_st(a, b, c, e.param_point(s, t)).unwrap_or([s, t]);
+            at.push((parents[k], st));
+        }
+    }
+    out.channels
+        .iter()
+        .map(|ch| {
+            at.iter()
+                .map(|&(k, [s, t])| ch.solution.eval(k, s, t))
+                .collect()
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::shapes::box_room;
+
+    /// Splitting keeps area, counts and the parent map, and children follow
+    /// their parent's place.
+    #[test]
+    fn refine_splits_in_place() {
+        let mesh = Mesh::new(Arc::new(box_room(1.0, 2.0, 1.5)), 1);
+        let (refined, parents) = refine(&mesh, &[3, 0, 40]);
+        assert_eq!(refined.len(), mesh.len() + 9);
+        crate::assert_close!(refined.area(), mesh.area(), 1e-12 * mesh.area());
+        assert_eq!(&parents[..5], &[0, 0, 0, 0, 1]);
+        assert_eq!(parents.iter().filter(|&&p| p == 40).count(), 4);
+        for (k, &p) in parents.iter().enumerate() {
+            let c = refined.position(k, 1.0 / 3.0, 1.0 / 3.0);
+            assert!(mesh.locate(c).is_some_and(|(q, _)| q == p));
+        }
+    }
+
+    /// The budget splits the worst elements that fit, and says why none fit.
+    #[test]
+    fn budget_caps_the_split() {
+        let cfg = SolveConfig {
+            check_memory: false,
+            ..Default::default()
+        };
+        let opts = AdaptOptions {
+            max_unknowns: Some(3 * (10 + 3 * 4)),
+            ..Default::default()
+        };
+        assert_eq!(budget(&opts, &cfg, 10, 3, 2), Ok(2));
+        assert_eq!(budget(&opts, &cfg, 10, 3, 9), Ok(4));
+        assert_eq!(budget(&opts, &cfg, 22, 3, 9), Err(StopReason::MaxUnknowns));
+    }
+}

@@ -1,0 +1,235 @@
+//! The shadowed family with an exact answer: a floor (ρ = 0.9) lit by a
+//! convex polygonal emitter (E = 1, ρ = 0) through a convex polygonal
+//! occluder (ρ = 0, E = 0), both horizontal and facing down. The floor sees
+//! itself nowhere and the other two reflect nothing, so on the floor
+//! u(P) = ρ · F(P → the part of the emitter P sees), with F from Lambert's
+//! contour formula, and the visible part = emitter minus the occluder
+//! projected from P onto the emitter's plane (a convex clip, computed here
+//! independently of the solver: Sutherland–Hodgman in the plane).
+//!
+//! Errors are measured everywhere (the lattice of every element: vertices,
+//! edges, interiors) relative to max u over S.
+
+use glam::DVec3;
+use radcol_core::alpha0::auto_alpha;
+use radcol_core::assembly::CpuBackend;
+use radcol_core::geometry::shapes::floor_under_occluder;
+use radcol_core::mesh::Site;
+use radcol_core::problem::{Field, Problem};
+use radcol_core::run::adapt::{solve_adaptive, AdaptOptions, StopReason};
+use radcol_core::run::{solve, SolveConfig};
+use std::f64::consts::PI;
+use std::sync::Arc;
+
+const RHO_FLOOR: f64 = 0.9;
+
+/// One member of the family: emitter and occluder polygons.
+struct Case {
+    name: &'static str,
+    emitter: Vec<DVec3>,
+    occluder: Vec<DVec3>,
+}
+
+fn square(cx: f64, cy: f64, hx: f64, hy: f64, z: f64) -> Vec<DVec3> {
+    vec![
+        DVec3::new(cx - hx, cy - hy, z),
+        DVec3::new(cx + hx, cy - hy, z),
+        DVec3::new(cx + hx, cy + hy, z),
+        DVec3::new(cx - hx, cy + hy, z),
+    ]
+}
+
+fn cases() -> Vec<Case> {
+    vec![
+        Case {
+            name: "square emitter, square occluder",
+            emitter: square(0.0, 0.0, 0.5, 0.5, 0.6),
+            occluder: square(0.1, 0.0, 0.25, 0.25, 0.3),
+        },
+        Case {
+            name: "square emitter, triangular occluder",
+            emitter: square(0.0, 0.0, 0.5, 0.5, 0.6),
+            occluder: vec![
+                DVec3::new(-0.3, -0.2, 0.25),
+                DVec3::new(0.3, -0.1, 0.25),
+                DVec3::new(0.0, 0.35, 0.25),
+            ],
+        },
+    ]
+}
+
+/// Lambert's contour formula: the form factor from the point `p` with unit
+/// normal `n` to the polygon `poly` (wholly in front of p).
+fn form_factor(p: DVec3, n: DVec3, poly: &[DVec3]) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i] - p, poly[(i + 1) % poly.len()] - p);
+        let c = a.cross(b);
+        let len = c.length();
+        if len > 0.0 {
+            sum += len.atan2(a.dot(b)) * n.dot(c) / len;
+        }
+    }
+    (sum / (2.0 * PI)).abs()
+}
+
+/// `subject` ∩ `clip` for convex polygons in one horizontal plane
+/// (Sutherland–Hodgman on x, y).
+fn intersect(subject: &[DVec3], clip: &[DVec3]) -> Vec<DVec3> {
+    let cross2 = |o: DVec3, a: DVec3, b: DVec3| (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+    let ccw = (0..clip.len())
+        .map(|i| cross2(clip[0], clip[i], clip[(i + 1) % clip.len()]))
+        .sum::<f64>()
+        > 0.0;
+    let mut out = subject.to_vec();
+    for i in 0..clip.len() {
+        let (a, b) = (clip[i], clip[(i + 1) % clip.len()]);
+        let inside = |p: DVec3| (cross2(a, b, p) >= 0.0) == ccw;
+        let input = std::mem::take(&mut out);
+        for j in 0..input.len() {
+            let (p, q) = (input[j], input[(j + 1) % input.len()]);
+            let (pi, qi) = (inside(p), inside(q));
+            if pi {
+                out.push(p);
+            }
+            if pi != qi {
+                let (dp, dq) = (cross2(a, b, p), cross2(a, b, q));
+                out.push(p + (q - p) * (dp / (dp - dq)));
+            }
+        }
+        if out.is_empty() {
+            break;
+        }
+    }
+    out
+}
+
+/// u on the floor at `p`: ρ (F(emitter) - F(emitter ∩ shadow of the occluder)).
+fn floor_u(case: &Case, p: DVec3) -> f64 {
+    let n = DVec3::Z;
+    let ze = case.emitter[0].z;
+    let projected: Vec<DVec3> = case
+        .occluder
+        .iter()
+        .map(|&v| p + (v - p) * ((ze - p.z) / (v.z - p.z)))
+        .collect();
+    let hidden = intersect(&case.emitter, &projected);
+    let f_hidden = if hidden.len() >= 3 {
+        form_factor(p, n, &hidden)
+    } else {
+        0.0
+    };
+    RHO_FLOOR * (form_factor(p, n, &case.emitter) - f_hidden)
+}
+
+fn problem(case: &Case) -> Problem {
+    let surface = Arc::new(floor_under_occluder(&case.emitter, &case.occluder));
+    let mut p = Problem::new(
+        surface,
+        Field::PerPatch(Arc::new(vec![RHO_FLOOR, 0.0, 0.0])),
+        Field::PerPatch(Arc::new(vec![0.0, 1.0, 0.0])),
+    );
+    let (emitter, occluder) = (case.emitter.clone(), case.occluder.clone());
+    let case = Case {
+        name: case.name,
+        emitter,
+        occluder,
+    };
+    p.exact = Some(Field::Custom(Arc::new(move |s: &Site| match s.patch {
+        0 => floor_u(&case, s.position),
+        1 => 1.0,
+        _ => 0.0,
+    })));
+    p
+}
+
+/// The closed form itself: below the centre of a square of side 2a at
+/// height h, F = (4/π) (a/d) atan(a/d) with d = √(a² + h²) (four corner
+/// rectangles); a point outside the shadow sees the whole emitter and one
+/// under the occluder sees less, but not nothing (penumbra).
+#[test]
+fn closed_form_checks() {
+    let (a, h) = (0.5f64, 0.6f64);
+    let d = (a * a + h * h).sqrt();
+    let want = 4.0 / PI * (a / d) * (a / d).atan();
+    let got = form_factor(DVec3::ZERO, DVec3::Z, &square(0.0, 0.0, a, a, h));
+    radcol_tests::assert_close("F square", 0, got, want, 1e-14);
+    let c = &cases()[0];
+    let whole = |p: DVec3| RHO_FLOOR * form_factor(p, DVec3::Z, &c.emitter);
+    let far = DVec3::new(-0.99, 0.99, 0.0);
+    radcol_tests::assert_close("unshadowed", 0, floor_u(c, far), whole(far), 1e-15);
+    let under = DVec3::new(0.1, 0.0, 0.0);
+    assert!(floor_u(c, under) > 0.0 && floor_u(c, under) < 0.5 * whole(under));
+}
+
+#[test]
+fn adaptive_refinement_reaches_1e_3_on_the_shadow_family() {
+    for case in cases() {
+        let p = problem(&case);
+        let cfg = SolveConfig {
+            degree: 1,
+            alpha: auto_alpha(1),
+            level: 1,
+            ..Default::default()
+        };
+        let opts = AdaptOptions {
+            target: 1e-3,
+            ..Default::default()
+        };
+        let t = std::time::Instant::now();
+        let res = solve_adaptive(&p, &cfg, &opts, &CpuBackend, |s| {
+            println!(
+                "  {:6} elements {:6} unknowns: estimate {:.3e}, true {:.3e}, {:.1} s, split {}",
+                s.elements,
+                s.unknowns,
+                s.estimate,
+                s.true_error.unwrap_or(f64::NAN),
+                s.seconds,
+                s.split
+            )
+        })
+        .expect("solves");
+        let last = res.steps.last().unwrap();
+        println!(
+            "{}: {:?} after {} steps, {:.1} s, {} unknowns",
+            case.name,
+            res.stop,
+            res.steps.len(),
+            t.elapsed().as_secs_f64(),
+            last.unknowns
+        );
+        assert_eq!(res.stop, StopReason::Reached);
+        let true_err = last.true_error.unwrap();
+        assert!(true_err <= 1e-3, "{}: true error {true_err:.3e}", case.name);
+        let eff = last.estimate / true_err;
+        assert!((0.3..=3.0).contains(&eff), "{}: effectivity {eff:.3}", case.name);
+    }
+}
+
+/// Uniform refinement of the same family, for comparison (slow: run with
+/// `--ignored`).
+#[test]
+#[ignore]
+fn uniform_refinement_of_the_shadow_family() {
+    for case in cases() {
+        for level in 1..=5 {
+            let cfg = SolveConfig {
+                degree: 1,
+                alpha: auto_alpha(1),
+                level,
+                ..Default::default()
+            };
+            let out = solve(&problem(&case), &cfg, &CpuBackend).expect("solves");
+            let ch = &out.channels[0];
+            let est = ch.estimate.as_ref().unwrap();
+            println!(
+                "{} level {level}: {} unknowns, true {:.3e}, estimate {:.3e}, {:.1} s",
+                case.name,
+                out.discretization.len(),
+                ch.errors.unwrap().global_max / est.scale,
+                est.max_rel,
+                out.timings.total_s
+            );
+        }
+    }
+}
