@@ -47,7 +47,18 @@ fn check_effectivity(label: &str, problem: &Problem, cases: &[(usize, u32)]) {
 
 #[test]
 fn estimate_tracks_the_error_on_the_sphere() {
-    let cases = [(0, 1), (0, 2), (0, 3), (1, 1), (1, 2), (1, 3), (2, 1), (2, 2), (3, 1), (3, 2)];
+    let cases = [
+        (0, 1),
+        (0, 2),
+        (0, 3),
+        (1, 1),
+        (1, 2),
+        (1, 3),
+        (2, 1),
+        (2, 2),
+        (3, 1),
+        (3, 2),
+    ];
     check_effectivity("sphere", &sphere_closed_form(), &cases);
 }
 
@@ -60,7 +71,11 @@ fn estimate_tracks_the_error_on_the_manufactured_ellipsoid() {
         Field::parse("exp(0.3*x + 0.5*y + 0.8*z)").unwrap(),
         ReferenceOperator::new(surface, 2),
     );
-    check_effectivity("ellipsoid", &problem, &[(0, 1), (0, 2), (1, 1), (1, 2), (2, 1)]);
+    check_effectivity(
+        "ellipsoid",
+        &problem,
+        &[(0, 1), (0, 2), (1, 1), (1, 2), (2, 1)],
+    );
 }
 
 /// The box room (edges where the walls meet at 90°: K is not compact there,
@@ -74,5 +89,9 @@ fn estimate_tracks_the_error_on_the_manufactured_box() {
         Field::parse("1 + 0.5*sin(x + 0.7*y) + 0.3*z*z").unwrap(),
         ReferenceOperator::new(surface, 2),
     );
-    check_effectivity("box", &problem, &[(0, 0), (0, 1), (0, 2), (1, 0), (1, 1), (2, 0), (2, 1)]);
+    check_effectivity(
+        "box",
+        &problem,
+        &[(0, 0), (0, 1), (0, 2), (1, 0), (1, 1), (2, 0), (2, 1)],
+    );
 }

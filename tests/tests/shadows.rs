@@ -76,7 +76,8 @@ fn form_factor(p: DVec3, n: DVec3, poly: &[DVec3]) -> f64 {
 /// `subject` ∩ `clip` for convex polygons in one horizontal plane
 /// (Sutherland–Hodgman on x, y).
 fn intersect(subject: &[DVec3], clip: &[DVec3]) -> Vec<DVec3> {
-    let cross2 = |o: DVec3, a: DVec3, b: DVec3| (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+    let cross2 =
+        |o: DVec3, a: DVec3, b: DVec3| (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
     let ccw = (0..clip.len())
         .map(|i| cross2(clip[0], clip[i], clip[(i + 1) % clip.len()]))
         .sum::<f64>()
@@ -202,7 +203,11 @@ fn adaptive_refinement_reaches_1e_3_on_the_shadow_family() {
         let true_err = last.true_error.unwrap();
         assert!(true_err <= 1e-3, "{}: true error {true_err:.3e}", case.name);
         let eff = last.estimate / true_err;
-        assert!((0.3..=3.0).contains(&eff), "{}: effectivity {eff:.3}", case.name);
+        assert!(
+            (0.3..=3.0).contains(&eff),
+            "{}: effectivity {eff:.3}",
+            case.name
+        );
     }
 }
 

@@ -25,7 +25,10 @@ fn sphere_degree_1_at_alpha0() {
 
 #[test]
 fn sphere_degree_2() {
-    check(2, 1..=3);
+    // Levels 2..4: at α = 0.109 (auto, the best conditioned root) level 1 is
+    // not yet asymptotic (global order 2.7 from level 1 to 2), though its errors
+    // are smaller than at α = 0.232 on every level (3.5e-4 against 6.4e-4 at level 4).
+    check(2, 2..=4);
 }
 
 #[test]

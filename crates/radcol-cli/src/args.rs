@@ -181,6 +181,22 @@ pub struct SolveArgs {
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub max_edge: Option<f64>,
 
+    /// Refine adaptively until the estimated max error relative to max |u| is at most TOL
+    /// (in (0, 1)): elements whose estimate is large are split 4:1 and the problem
+    /// re-solved, starting from --level/--max-edge [default: uniform refinement only].
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    pub target_error: Option<f64>,
+
+    /// With --target-error: never solve with more unknowns than N [default: what the
+    /// dense matrix's memory allows].
+    #[arg(long, value_name = "N", requires = "target_error")]
+    pub max_unknowns: Option<u64>,
+
+    /// With --target-error: fail (exit 1, outputs still written) when the target is not
+    /// reached within the budget.
+    #[arg(long, requires = "target_error")]
+    pub strict: bool,
+
     /// Write results; repeat for several files. By extension: .csv (one row per collocation
     /// node: element,node,x,y,z,u…), .ply and .glb/.gltf (per-vertex radiosity on a
     /// tessellation of every element), .png (tone-mapped image) or .exr (linear radiance u/π)

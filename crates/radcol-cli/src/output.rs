@@ -71,7 +71,10 @@ pub fn write_all(
                 let vm = vertices.as_ref().expect("tessellated above");
                 let mut f = create(&o.file)?;
                 match o.kind {
-                    OutputKind::Ply => export::ply::write(&mut f, vm, &names, &look.tone),
+                    OutputKind::Ply => {
+                        let errors = element_estimates(out).map(|e| vertex_values(vm, &e));
+                        export::ply::write(&mut f, vm, &names, &look.tone, errors.as_deref())
+                    }
                     OutputKind::Glb => export::gltf::write_glb(&mut f, vm, &look.tone),
                     _ => export::gltf::write_gltf(&mut f, vm, &look.tone),
                 }
@@ -128,12 +131,51 @@ pub fn channel_columns(out: &SolveOutcome) -> Vec<String> {
     }
 }
 
-/// Writes one row per collocation node: `element,node,x,y,z,u…`, every value
-/// in Rust's shortest round-trip form. Returns the number of rows.
+/// A per-element value at every vertex of `vm` (through its triangles).
+fn vertex_values(vm: &radcol_core::render::VertexMesh, per_element: &[f64]) -> Vec<f32> {
+    let mut v = vec![0.0f32; vm.vertex_count()];
+    for (tri, &k) in vm.indices.chunks_exact(3).zip(&vm.element) {
+        for &i in tri {
+            v[i as usize] = per_element[k as usize] as f32;
+        }
+    }
+    v
+}
+
+/// The estimate columns (one per channel, like [`channel_columns`]): the
+/// element's estimated max error, absolute.
+fn estimate_columns(out: &SolveOutcome) -> Vec<String> {
+    channel_columns(out)
+        .into_iter()
+        .map(|c| format!("{c}_error_estimate"))
+        .collect()
+}
+
+/// Per element, the worst channel's estimated max error relative to its
+/// max |u_n| (None without an estimate).
+pub fn element_estimates(out: &SolveOutcome) -> Option<Vec<f64>> {
+    let mut worst = vec![0.0f64; out.discretization.mesh().len()];
+    for ch in &out.channels {
+        for (w, e) in worst.iter_mut().zip(ch.estimate.as_ref()?.elements_rel()) {
+            *w = w.max(e);
+        }
+    }
+    Some(worst)
+}
+
+/// Writes one row per collocation node: `element,node,x,y,z,u…` and, when
+/// the solve was estimated, `u…_error_estimate` (the element's estimated max
+/// error, absolute), every value in Rust's shortest round-trip form.
+/// Returns the number of rows.
 pub fn write_csv(file: &OutputFile, out: &SolveOutcome) -> Result<usize> {
     let mut w = create(file)?;
+    let estimated = out.channels.iter().all(|c| c.estimate.is_some());
     let write = |w: &mut BufWriter<File>| -> std::io::Result<usize> {
-        writeln!(w, "element,node,x,y,z,{}", channel_columns(out).join(","))?;
+        let mut columns = channel_columns(out);
+        if estimated {
+            columns.extend(estimate_columns(out));
+        }
+        writeln!(w, "element,node,x,y,z,{}", columns.join(","))?;
         let points = out.discretization.points();
         for (i, p) in points.iter().enumerate() {
             write!(
@@ -143,6 +185,9 @@ pub fn write_csv(file: &OutputFile, out: &SolveOutcome) -> Result<usize> {
             )?;
             for ch in &out.channels {
                 write!(w, ",{:e}", ch.solution.nodal()[i])?;
+            }
+            for e in out.channels.iter().filter_map(|c| c.estimate.as_ref()) {
+                write!(w, ",{:e}", e.elements[p.element])?;
             }
             writeln!(w)?;
         }

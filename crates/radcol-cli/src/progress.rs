@@ -36,6 +36,11 @@ impl Bar {
         self.0.set_message(message);
     }
 
+    /// Prints a line above the bar (adaptive steps as they end).
+    pub fn note(&self, line: &str) {
+        self.0.println(line);
+    }
+
     /// Removes the bar.
     pub fn finish(self) {
         self.0.finish_and_clear();

@@ -158,17 +158,20 @@ fn solve_writes_csv_and_refuses_to_overwrite() {
     );
     let text = std::fs::read_to_string(&path).unwrap();
     let mut lines = text.lines();
-    assert_eq!(lines.next(), Some("element,node,x,y,z,u"));
+    assert_eq!(lines.next(), Some("element,node,x,y,z,u,u_error_estimate"));
     let rows: Vec<&str> = lines.collect();
     assert_eq!(rows.len(), 96, "one row per collocation node");
     for row in &rows {
         let fields: Vec<&str> = row.split(',').collect();
-        assert_eq!(fields.len(), 6, "{row}");
+        assert_eq!(fields.len(), 7, "{row}");
         let u: f64 = fields[5].parse().unwrap();
         assert!(
             (u - 2.0).abs() < 1e-6,
             "u = 2 on the unit sphere with ρ = 1/2, E = 1: {row}"
         );
+        // u_n is the exact constant: the estimate sees rounding only.
+        let est: f64 = fields[6].parse().unwrap();
+        assert!((0.0..1e-9).contains(&est), "estimate {est}: {row}");
         let (x, y, z): (f64, f64, f64) = (
             fields[2].parse().unwrap(),
             fields[3].parse().unwrap(),
@@ -202,6 +205,19 @@ fn solve_writes_csv_and_refuses_to_overwrite() {
         std::fs::read_to_string(&path).unwrap().lines().count(),
         1 + 24
     );
+    let out = radcol(&[
+        "solve",
+        "sphere",
+        "-l",
+        "0",
+        "--no-estimate",
+        "--out",
+        p,
+        "--force",
+    ]);
+    assert!(out.status.success());
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert_eq!(text.lines().next(), Some("element,node,x,y,z,u"));
 
     let txt = dir.join("u.txt");
     assert_one_line_error(
@@ -561,8 +577,76 @@ fn solve_cornell_writes_every_output() {
 
     // CSV: one row per collocation node, one column per channel.
     let csv = std::fs::read_to_string(&paths[5]).unwrap();
-    assert_eq!(csv.lines().next(), Some("element,node,x,y,z,u_R,u_G,u_B"));
+    assert_eq!(
+        csv.lines().next(),
+        Some("element,node,x,y,z,u_R,u_G,u_B,u_R_error_estimate,u_G_error_estimate,u_B_error_estimate")
+    );
     assert_eq!(csv.lines().count(), 1 + 3 * elements);
+}
+
+/// `--target-error` refines until the estimate is below the target, reports
+/// every step in JSON, and with the exact solution known the true error of
+/// the last step is below the target too; bad targets are one-line errors,
+/// and `--strict` fails (exit 1) when the budget stops the loop, after
+/// writing the outputs.
+#[test]
+fn target_error_refines_adaptively() {
+    let exact = "1 + 0.5*x*y + 0.3*z";
+    let args = [
+        "solve",
+        "box:1,2,1.5",
+        "-r",
+        "1",
+        "-l",
+        "0",
+        "--exact",
+        exact,
+        "--json",
+    ];
+    let mut a = args.to_vec();
+    a.extend(["--target-error", "2e-2"]);
+    let v = stdout_json(&radcol(&a));
+    let ad = &v["adaptive"];
+    assert_eq!(ad["stop"], "reached");
+    let steps = ad["steps"].as_array().unwrap();
+    assert!(steps.len() >= 2, "{steps:?}");
+    let last = steps.last().unwrap();
+    assert!(num(last, "estimate") <= 2e-2);
+    let true_err = num(last, "true_error");
+    assert!(true_err <= 2e-2 && true_err > 0.0, "true error {true_err}");
+    assert_eq!(num(&v, "unknowns") as u64, num(last, "unknowns") as u64);
+    assert!(num(&steps[0], "unknowns") < num(last, "unknowns"));
+    for bad in ["0", "-1e-3", "NaN", "1", "1.5"] {
+        assert_one_line_error(
+            &["solve", "sphere", "--target-error", bad],
+            2,
+            &["--target-error", "(0, 1)"],
+        );
+    }
+    assert_one_line_error(
+        &["solve", "sphere", "--target-error", "1e-3", "--no-estimate"],
+        2,
+        &["--no-estimate"],
+    );
+    let dir = scratch("strict");
+    let csv = dir.join("u.csv");
+    let mut a = args.to_vec();
+    a.extend([
+        "--target-error",
+        "1e-6",
+        "--max-unknowns",
+        "100",
+        "--strict",
+    ]);
+    a.extend(["--out", csv.to_str().unwrap()]);
+    let out = radcol(&a);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("--strict") && stderr.contains("budget"),
+        "{stderr}"
+    );
+    assert!(csv.exists(), "outputs are written before --strict fails");
 }
 
 /// (position, normal, radiosity per channel) of every vertex of a radcol PLY.

@@ -170,7 +170,11 @@ fn summarise(
     let check = disc.nodes();
     let fc = check.len();
     let nodal = ch.solution.nodal();
-    let nonneg = ch.emission.iter().chain(ch.emission_nodes).all(|&e| e >= 0.0);
+    let nonneg = ch
+        .emission
+        .iter()
+        .chain(ch.emission_nodes)
+        .all(|&e| e >= 0.0);
     let lattice: Vec<[f64; 2]> = (0..=LATTICE)
         .flat_map(|a| (0..=LATTICE - a).map(move |b| [a, b]))
         .map(|[a, b]| [a as f64 / LATTICE as f64, b as f64 / LATTICE as f64])
@@ -241,7 +245,7 @@ mod tests {
             for alpha in [0.01, 0.05, 0.06, 0.1, 0.1666, 0.25, 0.33] {
                 let nodes = NodeSet::new(r, alpha).unwrap();
                 let check = check_nodes(r, alpha);
-                                let close = check
+                let close = check
                     .points()
                     .iter()
                     .filter(|c| {
@@ -254,7 +258,10 @@ mod tests {
                 // Only the centroid may coincide (it is a node of every
                 // degree divisible by 3).
                 assert!(check.degree() == (r + 1).min(MAX_DEGREE));
-                assert!(close <= 1, "r = {r}, α = {alpha}: {close} check points on nodes");
+                assert!(
+                    close <= 1,
+                    "r = {r}, α = {alpha}: {close} check points on nodes"
+                );
             }
         }
     }

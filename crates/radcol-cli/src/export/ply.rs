@@ -30,13 +30,16 @@ fn radiosity_properties(channel_names: &[&str]) -> Result<Vec<String>> {
 
 /// Writes `mesh` as binary little-endian PLY: per vertex `x y z nx ny nz`
 /// (float), `red green blue` (uchar, `tm` applied to the radiance u/π as for
-/// images, sRGB-encoded) and one float per channel with the raw radiosity u_n;
-/// faces as `list uchar int vertex_indices`.
+/// images, sRGB-encoded), one float per channel with the raw radiosity u_n
+/// and, when given, `error_estimate` (float: the estimated max error of the
+/// vertex's element relative to max |u_n|, one value per vertex); faces as
+/// `list uchar int vertex_indices`.
 pub fn write<W: Write>(
     mut w: W,
     mesh: &VertexMesh,
     channel_names: &[&str],
     tm: &ToneMap,
+    error_estimate: Option<&[f32]>,
 ) -> Result<()> {
     let props = radiosity_properties(channel_names)?;
     let nv = mesh.positions.len();
@@ -53,6 +56,12 @@ pub fn write<W: Write>(
     for p in &props {
         header += &format!("property float {p}\n");
     }
+    if let Some(e) = error_estimate {
+        if e.len() != nv {
+            bail!("PLY: {} error values for {nv} vertices", e.len());
+        }
+        header += "property float error_estimate\n";
+    }
     header += &format!(
         "element face {}\nproperty list uchar int vertex_indices\nend_header\n",
         mesh.indices.len() / 3
@@ -68,6 +77,9 @@ pub fn write<W: Write>(
         buf.extend_from_slice(&colors[i]);
         for u in &mesh.values[i][..props.len()] {
             buf.extend_from_slice(&u.to_le_bytes());
+        }
+        if let Some(e) = error_estimate {
+            buf.extend_from_slice(&e[i].to_le_bytes());
         }
     }
     for tri in mesh.indices.chunks_exact(3) {
@@ -124,7 +136,7 @@ pub(crate) mod tests {
             auto: false,
         };
         let mut bytes = Vec::new();
-        write(&mut bytes, &mesh, &["r", "g", "b"], &tm).unwrap();
+        write(&mut bytes, &mesh, &["r", "g", "b"], &tm, None).unwrap();
         let ply = Parser::<DefaultElement>::new()
             .read_ply(&mut &bytes[..])
             .unwrap();
@@ -175,11 +187,40 @@ pub(crate) mod tests {
         );
     }
 
+    /// The per-vertex error estimate is one more float, read back as written.
+    #[test]
+    fn error_estimate_property() {
+        let mesh = tiny();
+        let errors = [0.0f32, 1e-3, 2e-3, 3e-3, 4e-3, 5e-3];
+        let mut bytes = Vec::new();
+        write(
+            &mut bytes,
+            &mesh,
+            &["u"],
+            &ToneMap::default(),
+            Some(&errors),
+        )
+        .unwrap();
+        let ply = Parser::<DefaultElement>::new()
+            .read_ply(&mut &bytes[..])
+            .unwrap();
+        assert_eq!(
+            ply.header.elements["vertex"].properties["error_estimate"].data_type,
+            PropertyType::Scalar(ScalarType::Float)
+        );
+        for (i, &e) in errors.iter().enumerate() {
+            assert_eq!(
+                ply.payload["vertex"][i]["error_estimate"],
+                Property::Float(e)
+            );
+        }
+    }
+
     #[test]
     fn grey_and_errors() {
         let mesh = tiny();
         let mut bytes = Vec::new();
-        write(&mut bytes, &mesh, &["grey"], &ToneMap::default()).unwrap();
+        write(&mut bytes, &mesh, &["grey"], &ToneMap::default(), None).unwrap();
         let ply = Parser::<DefaultElement>::new()
             .read_ply(&mut &bytes[..])
             .unwrap();
@@ -187,11 +228,20 @@ pub(crate) mod tests {
         assert_eq!(props.len(), 10);
         assert!(props.contains_key("radiosity"));
         assert_eq!(ply.payload["vertex"][3]["radiosity"], Property::Float(2.0));
-        assert!(write(Vec::new(), &mesh, &["r", "g"], &ToneMap::default()).is_err());
-        assert!(write(Vec::new(), &mesh, &["r", "g b", "c"], &ToneMap::default()).is_err());
+        assert!(write(Vec::new(), &mesh, &["r", "g"], &ToneMap::default(), None).is_err());
+        assert!(write(
+            Vec::new(),
+            &mesh,
+            &["r", "g b", "c"],
+            &ToneMap::default(),
+            None
+        )
+        .is_err());
+        let short = [0.5f32; 5];
+        assert!(write(Vec::new(), &mesh, &["u"], &ToneMap::default(), Some(&short)).is_err());
         let mut bad = tiny();
         bad.indices[4] = 6;
-        let err = write(Vec::new(), &bad, &["u"], &ToneMap::default()).unwrap_err();
+        let err = write(Vec::new(), &bad, &["u"], &ToneMap::default(), None).unwrap_err();
         assert!(
             err.to_string().contains("index 4 (triangle 1) = 6"),
             "{err}"

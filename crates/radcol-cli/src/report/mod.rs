@@ -2,11 +2,13 @@
 //! and text from `Display` of the same struct, so both list the same fields.
 //! Pure formatting: every number comes from core.
 
+mod adapt;
 mod info;
 mod nodes;
 mod solve;
 mod study;
 
+pub use adapt::{AdaptLine, AdaptReport};
 pub use info::{
     BoundingBox, ElementSize, Estimate, InfoReport, MaterialInfo, SceneInfo, ShapeRatio,
 };

@@ -1,7 +1,7 @@
 //! `radcol solve`: mesh, problem, visibility, backend, assembly, timings and
 //! per-channel results.
 
-use super::{alpha_text, sci, secs, ProblemText};
+use super::{alpha_text, sci, secs, AdaptReport, ProblemText};
 use crate::setup::Setup;
 use radcol_core::assembly::{BackendInfo, VisibilityMode};
 use radcol_core::estimate::ErrorEstimate;
@@ -108,6 +108,8 @@ pub struct SolveReport {
     materials: Option<Vec<MaterialShort>>,
     channels: Vec<ChannelReport>,
     out: Vec<Written>,
+    /// The adaptive loop's steps, with --target-error.
+    pub adaptive: Option<AdaptReport>,
     #[serde(skip)]
     contents: Option<SceneSummary>,
 }
@@ -180,14 +182,13 @@ impl SolveReport {
                     errors: c.errors,
                     estimate: c.estimate.clone(),
                     effectivity: match (&c.errors, &c.estimate) {
-                        (Some(e), Some(est)) if e.global_max > 0.0 => {
-                            Some(est.max / e.global_max)
-                        }
+                        (Some(e), Some(est)) if e.global_max > 0.0 => Some(est.max / e.global_max),
                         _ => None,
                     },
                 })
                 .collect(),
             out: written.to_vec(),
+            adaptive: None,
             contents: scene.map(|sc| SceneSummary {
                 triangles: sc.triangle_count(),
                 materials: sc.materials.len(),
@@ -352,6 +353,9 @@ impl fmt::Display for SolveReport {
             secs(t.estimate_s),
             secs(t.total_s)
         )?;
+        if let Some(a) = &self.adaptive {
+            write!(f, "{a}")?;
+        }
         self.fmt_channels(f)?;
         for w in &self.out {
             writeln!(f, "  wrote {} to {} ({})", w.what, w.path, secs(w.seconds))?;

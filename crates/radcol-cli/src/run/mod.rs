@@ -6,13 +6,15 @@ mod info;
 
 use crate::error::with_flags;
 use crate::report::{
-    self, NodesReport, SolveReport, StudyFooter, StudyHeader, StudyLine, StudyReport,
+    self, AdaptLine, AdaptReport, NodesReport, SolveReport, StudyFooter, StudyHeader, StudyLine,
+    StudyReport,
 };
 use crate::setup::{self, check_writable, resolve_alpha};
 use crate::validate::{Config, NodesJob, SolveJob, StudyJob};
 use crate::{output, plot, progress};
 use anyhow::{Context, Result};
 use radcol_core::nodes::NodeSet;
+use radcol_core::run::adapt::solve_adaptive;
 use radcol_core::run::solve;
 use radcol_core::study::{predicted_orders, Study};
 use std::io::{self, Write};
@@ -39,12 +41,37 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
     let look = setup::look(&job.look, &s);
     let bar = progress::Bar::for_stderr();
     s.cfg.progress = bar.as_ref().map(|b| b.handle());
-    let out = solve(&s.problem, &s.cfg, s.backend.as_ref()).map_err(with_flags)?;
+    let (out, adaptive) = match &job.adapt {
+        None => (
+            solve(&s.problem, &s.cfg, s.backend.as_ref()).map_err(with_flags)?,
+            None,
+        ),
+        Some(opts) => {
+            let res = solve_adaptive(&s.problem, &s.cfg, opts, s.backend.as_ref(), |step| {
+                if let Some(b) = &bar {
+                    b.note(&AdaptLine(step).to_string());
+                }
+            })
+            .map_err(with_flags)?;
+            let report = AdaptReport::new(opts, &res);
+            (res.outcome, Some(report))
+        }
+    };
     let written = output::write_all(&job.outputs, &look, &out, bar.as_ref())?;
     if let Some(b) = bar {
         b.finish();
     }
-    report::emit(w, &SolveReport::new(&s, &out, &written), s.json)
+    let unmet = adaptive
+        .as_ref()
+        .filter(|a| !a.reached())
+        .map(|a| a.summary());
+    let mut report = SolveReport::new(&s, &out, &written);
+    report.adaptive = adaptive;
+    report::emit(w, &report, s.json)?;
+    match unmet {
+        Some(why) if job.strict => Err(anyhow::anyhow!("--strict: {why}")),
+        _ => Ok(()),
+    }
 }
 
 fn run_study(job: StudyJob, w: &mut dyn Write) -> Result<()> {

@@ -17,6 +17,7 @@ use outputs::{look, output, svg_file};
 use radcol_core::assembly::{QuadratureOptions, VisibilityMode};
 use radcol_core::nodes::{check_alpha, check_degree};
 use radcol_core::problem::Field;
+use radcol_core::run::adapt::AdaptOptions;
 use radcol_core::run::SolverKind;
 use radcol_core::solve::GmresParams;
 use radcol_gpu::{BackendChoice, Precision};
@@ -88,6 +89,10 @@ pub struct SolveJob {
     pub outputs: Vec<Output>,
     /// How images and vertex meshes are made.
     pub look: LookSpec,
+    /// Adaptive refinement to a target, when asked for.
+    pub adapt: Option<AdaptOptions>,
+    /// Fail when the target is not reached.
+    pub strict: bool,
 }
 
 /// `radcol study`.
@@ -151,12 +156,44 @@ fn solve_job(a: SolveArgs) -> Result<SolveJob> {
     let max_edge = a.max_edge.map(check_max_edge).transpose()?;
     let problem = problem(&a.problem)?;
     let look = look(&a)?;
+    let adapt = a
+        .target_error
+        .map(|t| adapt(t, a.max_unknowns, &problem))
+        .transpose()?;
     Ok(SolveJob {
         problem,
         level: a.level,
         max_edge,
         outputs,
         look,
+        adapt,
+        strict: a.strict,
+    })
+}
+
+/// `--target-error` and its budget.
+fn adapt(
+    target: f64,
+    max_unknowns: Option<u64>,
+    p: &ProblemSpec,
+) -> Result<AdaptOptions, BadInput> {
+    if !(target > 0.0 && target < 1.0) {
+        return Err(bad_input(format!(
+            "--target-error {target}: the target (max error relative to max |u|) must lie in (0, 1)"
+        )));
+    }
+    if max_unknowns == Some(0) {
+        return Err(bad_input("--max-unknowns must be at least 1"));
+    }
+    if !p.estimate {
+        return Err(bad_input(
+            "--target-error refines where the error estimate is large: it cannot be used with --no-estimate",
+        ));
+    }
+    Ok(AdaptOptions {
+        target,
+        max_unknowns,
+        ..Default::default()
     })
 }
 

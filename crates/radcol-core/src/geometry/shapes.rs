@@ -188,7 +188,10 @@ pub fn floor_under_occluder(emitter: &[DVec3], occluder: &[DVec3]) -> Surface {
         patches: vec![
             patch(
                 "floor",
-                vec![[floor[0], floor[1], floor[2]], [floor[0], floor[2], floor[3]]],
+                vec![
+                    [floor[0], floor[1], floor[2]],
+                    [floor[0], floor[2], floor[3]],
+                ],
             ),
             patch("emitter", facing_down(emitter)),
             patch("occluder", facing_down(occluder)),

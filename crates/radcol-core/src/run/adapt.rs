@@ -54,9 +54,7 @@ impl AdaptOptions {
     /// Refuses a target outside (0, 1) and a zero budget.
     pub fn check(&self) -> Result<(), InputError> {
         if !(self.target > 0.0 && self.target < 1.0) {
-            return Err(InputError::TargetError {
-                value: self.target,
-            });
+            return Err(InputError::TargetError { value: self.target });
         }
         Ok(())
     }
@@ -225,7 +223,8 @@ fn budget(
     f: usize,
     marked: usize,
 ) -> Result<usize, StopReason> {
-    let fits_memory = |n: u64| !cfg.check_memory || MemoryEstimate::new(n).check(cfg.solver).is_ok();
+    let fits_memory =
+        |n: u64| !cfg.check_memory || MemoryEstimate::new(n).check(cfg.solver).is_ok();
     let unknowns = |split: usize| ((elements + 3 * split) * f) as u64;
     let allowed = |split: usize| {
         opts.max_unknowns.is_none_or(|m| unknowns(split) <= m) && fits_memory(unknowns(split))

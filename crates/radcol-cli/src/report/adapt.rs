@@ -1,0 +1,93 @@
+//! `radcol solve --target-error`: the adaptive loop's steps and why it stopped.
+
+use super::{sci, secs};
+use radcol_core::run::adapt::{AdaptOptions, AdaptOutcome, AdaptStep, StopReason};
+use serde::Serialize;
+use std::fmt;
+
+/// The loop as run.
+#[derive(Clone, Debug, Serialize)]
+pub struct AdaptReport {
+    /// Target of the estimated max error relative to max |u|.
+    target: f64,
+    /// The unknowns budget, when given.
+    max_unknowns: Option<u64>,
+    /// The estimate reached (worst channel, relative max).
+    reached_estimate: f64,
+    /// Why it stopped.
+    stop: StopReason,
+    /// Every step.
+    steps: Vec<AdaptStep>,
+}
+
+impl AdaptReport {
+    /// The report of `res`, run with `opts`.
+    pub fn new(opts: &AdaptOptions, res: &AdaptOutcome) -> Self {
+        Self {
+            target: opts.target,
+            max_unknowns: opts.max_unknowns,
+            reached_estimate: res.steps.last().map_or(f64::NAN, |s| s.estimate),
+            stop: res.stop,
+            steps: res.steps.clone(),
+        }
+    }
+
+    /// Whether the target was reached.
+    pub fn reached(&self) -> bool {
+        self.stop == StopReason::Reached
+    }
+
+    /// One sentence: what was reached and why the loop stopped.
+    pub fn summary(&self) -> String {
+        format!(
+            "estimated error {} against the target {} after {} steps: {}",
+            sci(self.reached_estimate),
+            sci(self.target),
+            self.steps.len(),
+            self.stop
+        )
+    }
+}
+
+/// One step as a line of text.
+pub struct AdaptLine<'a>(pub &'a AdaptStep);
+
+impl fmt::Display for AdaptLine<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let s = self.0;
+        write!(
+            f,
+            "  step        {:7} elements {:8} unknowns  estimate max {} rms {}{}  {}{}",
+            s.elements,
+            s.unknowns,
+            sci(s.estimate),
+            sci(s.estimate_rms),
+            s.true_error
+                .map(|e| format!("  true {}", sci(e)))
+                .unwrap_or_default(),
+            secs(s.seconds),
+            if s.split > 0 {
+                format!(", split {}", s.split)
+            } else {
+                String::new()
+            }
+        )
+    }
+}
+
+impl fmt::Display for AdaptReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "  adaptive    target {} (max error / max |u|, estimated){}",
+            sci(self.target),
+            self.max_unknowns
+                .map(|m| format!(", at most {m} unknowns"))
+                .unwrap_or_default()
+        )?;
+        for s in &self.steps {
+            writeln!(f, "{}", AdaptLine(s))?;
+        }
+        writeln!(f, "  stopped     {}", self.summary())
+    }
+}
