@@ -85,8 +85,9 @@ pub struct ProblemArgs {
     #[arg(long, short = 'r', value_name = "R", default_value_t = 1)]
     pub degree: usize,
 
-    /// Node parameter α in (0, 1/3), or `auto`: α0 when it exists (odd r), else the α
-    /// minimising the degree-(r+1) defect of the node rule (see `radcol nodes`).
+    /// Node parameter α in (0, 1/3), or `auto`: of the α at which the node rule gains a
+    /// degree of precision (α0 for odd r), the one with the smallest Lebesgue constant;
+    /// else the α minimising the degree-(r+1) defect (see `radcol nodes`).
     #[arg(long, value_name = "A|auto", default_value = "auto")]
     pub alpha: String,
 
@@ -266,7 +267,8 @@ pub struct NodesArgs {
     #[arg(long, short = 'r', value_name = "R", default_value_t = 1)]
     pub degree: usize,
 
-    /// Node parameter α in (0, 1/3), or `auto` (α0 when it exists, else the best α).
+    /// Node parameter α in (0, 1/3), or `auto` (the best conditioned α that lifts the
+    /// rule's precision, α0 for odd r; else the defect minimiser).
     #[arg(long, value_name = "A|auto", default_value = "auto")]
     pub alpha: String,
 

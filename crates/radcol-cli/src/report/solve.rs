@@ -110,6 +110,8 @@ pub struct SolveReport {
     out: Vec<Written>,
     /// The adaptive loop's steps, with --target-error.
     pub adaptive: Option<AdaptReport>,
+    /// What makes this answer doubtful, and what to change.
+    warnings: Vec<String>,
     #[serde(skip)]
     contents: Option<SceneSummary>,
 }
@@ -189,6 +191,7 @@ impl SolveReport {
                 .collect(),
             out: written.to_vec(),
             adaptive: None,
+            warnings: super::adapt::solve_warnings(s, out),
             contents: scene.map(|sc| SceneSummary {
                 triangles: sc.triangle_count(),
                 materials: sc.materials.len(),
@@ -359,6 +362,9 @@ impl fmt::Display for SolveReport {
         self.fmt_channels(f)?;
         for w in &self.out {
             writeln!(f, "  wrote {} to {} ({})", w.what, w.path, secs(w.seconds))?;
+        }
+        for w in &self.warnings {
+            writeln!(f, "  warning: {w}")?;
         }
         Ok(())
     }

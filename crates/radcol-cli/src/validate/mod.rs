@@ -39,7 +39,7 @@ pub enum Config {
 /// The node parameter as asked for.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum AlphaSpec {
-    /// `--alpha auto`: α0 when it exists, else the defect minimiser.
+    /// `--alpha auto`: the best conditioned α that lifts the rule's precision, else the defect minimiser.
     Auto,
     /// A number in (0, 1/3).
     Value(f64),
