@@ -88,6 +88,19 @@ pub fn sphere_closed_form() -> Problem {
     p
 }
 
+/// The manufactured problem on the ellipsoid (1, 1.3, 0.8): ρ = 0.4 +
+/// 0.1x − 0.1z, u = exp(0.3x + 0.5y + 0.8z), E = u − K u with K u from the
+/// reference operator (tolerance 1e-14 on a fixed mesh of level 2).
+pub fn ellipsoid_manufactured() -> Problem {
+    let surface = Arc::new(ellipsoid(1.0, 1.3, 0.8));
+    Problem::manufactured(
+        surface.clone(),
+        Field::parse("0.4 + 0.1*x - 0.1*z").unwrap(),
+        Field::parse("exp(0.3*x + 0.5*y + 0.8*z)").unwrap(),
+        radcol_core::problem::ReferenceOperator::new(surface, 2),
+    )
+}
+
 /// One small problem per built-in shape for solver and backend agreement:
 /// (name, problem, degree r, level), with ρ = 0.7 - 0.1z², E = 1 + xy.
 pub fn mixed_problems() -> Vec<(String, Problem, usize, u32)> {

@@ -6,10 +6,10 @@
 
 use radcol_core::alpha0::auto_alpha;
 use radcol_core::assembly::CpuBackend;
-use radcol_core::geometry::shapes::{box_room, ellipsoid};
+use radcol_core::geometry::shapes::box_room;
 use radcol_core::problem::{Field, Problem, ReferenceOperator};
 use radcol_core::run::{solve, SolveConfig};
-use radcol_tests::sphere_closed_form;
+use radcol_tests::{ellipsoid_manufactured, sphere_closed_form};
 use std::sync::Arc;
 
 /// Solves `problem` at each (r, level) and checks both effectivities.
@@ -64,16 +64,9 @@ fn estimate_tracks_the_error_on_the_sphere() {
 
 #[test]
 fn estimate_tracks_the_error_on_the_manufactured_ellipsoid() {
-    let surface = Arc::new(ellipsoid(1.0, 1.3, 0.8));
-    let problem = Problem::manufactured(
-        surface.clone(),
-        Field::parse("0.4 + 0.1*x - 0.1*z").unwrap(),
-        Field::parse("exp(0.3*x + 0.5*y + 0.8*z)").unwrap(),
-        ReferenceOperator::new(surface, 2),
-    );
     check_effectivity(
         "ellipsoid",
-        &problem,
+        &ellipsoid_manufactured(),
         &[(0, 1), (0, 2), (1, 1), (1, 2), (2, 1)],
     );
 }
