@@ -329,9 +329,55 @@ fn study_text_prints_table_and_theory() {
     assert!(text.contains("theory"), "{text}");
 }
 
+/// Without --exact a study estimates its errors: the global and L2 columns
+/// are the estimate (and fall with h), the node column is not estimable.
+/// With --exact the rows carry the estimate's effectivity too.
+#[test]
+fn study_without_exact_uses_the_estimate() {
+    let args = [
+        "study",
+        "box:1,2,1.5",
+        "-r",
+        "1",
+        "--levels",
+        "0..2",
+        "--rho",
+        "0.6",
+        "--emission",
+        "1 + x*y",
+        "--json",
+    ];
+    let v = stdout_json(&radcol(&args));
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 3);
+    for (i, r) in rows.iter().enumerate() {
+        assert_eq!(r["estimated"], true);
+        assert!(r["nodes_max"].is_null(), "{r}");
+        assert_eq!(num(r, "global_max"), num(r, "estimate_max"));
+        if i > 0 {
+            assert!(num(r, "global_max") < num(&rows[i - 1], "global_max"));
+        }
+    }
+    let mut text_args = args[..args.len() - 1].to_vec();
+    text_args.push("--no-estimate");
+    assert_one_line_error(&text_args, 2, &["--no-estimate"]);
+    let v = stdout_json(&radcol(&[
+        "study", "sphere", "-r", "1", "--levels", "1..2", "--exact", "exp(z)", "--json",
+    ]));
+    for r in v["rows"].as_array().unwrap() {
+        assert_eq!(r["estimated"], false);
+        let eff = num(r, "effectivity");
+        assert!((0.3..=3.0).contains(&eff), "effectivity {eff}");
+    }
+}
+
 #[test]
 fn study_requires_exact_and_valid_levels() {
-    assert_one_line_error(&["study", "sphere", "--levels", "0..1"], 2, &["--exact"]);
+    assert_one_line_error(
+        &["study", "sphere", "--levels", "0..1", "--no-estimate"],
+        2,
+        &["--exact", "--no-estimate"],
+    );
     assert_one_line_error(
         &["study", "sphere", "--levels", "2..1", "--exact", "z"],
         2,

@@ -87,7 +87,7 @@ pub enum InputError {
         patch: String,
     },
     /// A refinement study of a problem without an exact solution.
-    #[error("a study measures errors against the exact solution, and this problem has none")]
+    #[error("a study measures errors against the exact solution or estimates them, and this problem has no exact solution and the estimate is off")]
     NoExactSolution,
     /// A backend asked for a precision it does not compute in.
     #[error("the {backend} backend computes in {supported} only; {asked} needs the GPU backend")]

@@ -4,6 +4,7 @@
 use crate::alpha0::Alpha0Report;
 use crate::assembly::AssemblyBackend;
 use crate::error::{Error, InputError};
+use crate::norms::ErrorNorms;
 use crate::problem::Problem;
 use crate::run::{check_size, solve, SolveConfig};
 use serde::Serialize;
@@ -41,6 +42,16 @@ pub struct StudyRow {
     pub iterations: usize,
     /// Kernel evaluations of the assembly.
     pub kernel_evals: u64,
+    /// True when the problem has no exact solution and the error columns are
+    /// the a posteriori estimate ([`crate::estimate`]): `global_max` and `l2`
+    /// estimated, `nodes_max` not estimable (η vanishes at the nodes: NaN).
+    pub estimated: bool,
+    /// The estimate's max and L² (absolute, first channel), when estimated.
+    pub estimate_max: Option<f64>,
+    /// See `estimate_max`.
+    pub estimate_l2: Option<f64>,
+    /// Estimate / true global max error, when both are known.
+    pub effectivity: Option<f64>,
     /// Errors at or below this (1000 ε · max |u_n| at the nodes) are rounding,
     /// not discretization error: no EOC is computed from them and fitted orders
     /// leave them out.
@@ -136,8 +147,9 @@ pub fn predicted_orders(r: usize, alpha: f64, a0: &Alpha0Report) -> PredictedOrd
 }
 
 /// A refinement study that has been checked and may run: the problem has an
-/// exact solution and the finest level fits in memory, so a study that
-/// cannot finish is refused before its first level is solved.
+/// exact solution or its errors are estimated, and the finest level fits in
+/// memory, so a study that cannot finish is refused before its first level
+/// is solved.
 #[derive(Debug)]
 pub struct Study<'a> {
     problem: &'a Problem,
@@ -152,7 +164,7 @@ impl<'a> Study<'a> {
         base: &SolveConfig,
         levels: std::ops::RangeInclusive<u32>,
     ) -> Result<Self, Error> {
-        if problem.exact.is_none() {
+        if problem.exact.is_none() && !base.estimate {
             return Err(InputError::NoExactSolution.into());
         }
         check_size(
@@ -207,7 +219,16 @@ fn run_levels(
         };
         let out = solve(problem, &cfg, backend)?;
         let ch = &out.channels[0];
-        let e = ch.errors.expect("exact solution given");
+        let estimate = ch.estimate.as_ref();
+        let e = match (ch.errors, estimate) {
+            (Some(e), _) => e,
+            (None, Some(est)) => ErrorNorms {
+                nodes_max: f64::NAN,
+                global_max: est.max,
+                l2: est.l2,
+            },
+            (None, None) => return Err(InputError::NoExactSolution.into()),
+        };
         let prev = rows.last();
         let scale = ch
             .solution
@@ -249,6 +270,13 @@ fn run_levels(
             total_s: out.timings.total_s,
             iterations: ch.solver.iterations,
             kernel_evals: out.kernel_evals,
+            estimated: ch.errors.is_none(),
+            estimate_max: estimate.map(|x| x.max),
+            estimate_l2: estimate.map(|x| x.l2),
+            effectivity: match (ch.errors, estimate) {
+                (Some(e), Some(x)) if e.global_max > 0.0 => Some(x.max / e.global_max),
+                _ => None,
+            },
             rounding_floor: floor,
         };
         progress(&row);
@@ -278,6 +306,10 @@ mod tests {
             total_s: 0.0,
             iterations: 0,
             kernel_evals: 0,
+            estimated: false,
+            estimate_max: None,
+            estimate_l2: None,
+            effectivity: None,
             rounding_floor: 2.2e-13,
         }
     }

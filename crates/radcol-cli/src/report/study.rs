@@ -67,6 +67,12 @@ impl fmt::Display for StudyHeader {
             self.levels[1],
             self.backend
         )?;
+        if self.problem.exact.is_none() {
+            writeln!(
+                f,
+                "errors estimated (no --exact): global_max and l2 of η = E + K u_n - u_n at check points; nodes_max is not estimable (η = 0 at the nodes)"
+            )?;
+        }
         writeln!(
             f,
             "{:>5} {:>9} {:>9} {:>10} {:>10} {:>10} {:>10} {:>9} {:>10} {:>7} {:>11} {:>10}",
@@ -94,16 +100,23 @@ impl fmt::Display for StudyLine<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let r = self.0;
         let eoc = |v: Option<f64>| v.map(|x| format!("{x:.3}")).unwrap_or_else(|| "-".into());
+        let err = |v: f64| {
+            if v.is_finite() {
+                format!("{v:.3e}")
+            } else {
+                "-".into()
+            }
+        };
         writeln!(
             f,
-            "{:>5} {:>9} {:>9} {:>10.6} {:>10.3e} {:>10.3e} {:>10.3e} {:>9} {:>10} {:>7} {:>11.4} {:>10.4}",
+            "{:>5} {:>9} {:>9} {:>10.6} {:>10} {:>10} {:>10} {:>9} {:>10} {:>7} {:>11.4} {:>10.4}",
             r.level,
             r.elements,
             r.unknowns,
             r.h,
-            r.nodes_max,
-            r.global_max,
-            r.l2,
+            err(r.nodes_max),
+            err(r.global_max),
+            err(r.l2),
             eoc(r.eoc_nodes),
             eoc(r.eoc_global),
             eoc(r.eoc_l2),

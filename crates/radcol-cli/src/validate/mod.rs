@@ -209,10 +209,9 @@ fn check_max_edge(h: f64) -> Result<f64, BadInput> {
 fn study_job(a: StudyArgs) -> Result<StudyJob> {
     let levels = parse_levels(&a.levels)?;
     let problem = problem(&a.problem)?;
-    if problem.exact.is_none() {
+    if problem.exact.is_none() && !problem.estimate {
         return Err(bad_input(
-            "a study measures errors against the exact solution: give --exact EXPR \
-             (E is then manufactured as u - K u unless --emission is given)",
+            "a study without --exact EXPR estimates its errors: it cannot be used with --no-estimate",
         )
         .into());
     }
