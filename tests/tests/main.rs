@@ -8,6 +8,7 @@
 //! `-- --nocapture` for the measured figures.
 
 mod box_constant;
+mod contact;
 mod ellipsoid_orders;
 mod estimate;
 mod gpu_conformance;

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 const SCENES: &str = "sphere (unit sphere), sphere:R, ellipsoid:A,B,C, box:LX,LY,LZ \
 (the room [0,LX]x[0,LY]x[0,LZ]); the built-in triangle scenes cornell (the Cornell box), \
-room (an empty lit room) and plates (two facing squares); or FILE.obj with its MTL materials \
+room (an empty lit room), shadow (a floor under a light and a floating occluder) and plates (two facing squares); or FILE.obj with its MTL materials \
 (Kd = reflectance ρ, Ke = emission E, per colour channel R, G, B)";
 
 /// Collocation for the radiosity equation u - (ρ/π) ∫ G u = E on curved and

@@ -328,6 +328,10 @@ mod tests {
             total_s: 0.02 * (level + 1) as f64,
             iterations: 5,
             kernel_evals: 1000,
+            estimated: false,
+            estimate_max: None,
+            estimate_l2: None,
+            effectivity: None,
             rounding_floor: 2.2e-13,
         }
     }

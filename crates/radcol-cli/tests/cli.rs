@@ -695,6 +695,26 @@ fn target_error_refines_adaptively() {
     assert!(csv.exists(), "outputs are written before --strict fails");
 }
 
+/// The built-in shadow scene (umbra and penumbra) reaches 1e-2 adaptively
+/// from its default mesh, and the element estimates shrink where it split.
+#[test]
+fn shadow_scene_reaches_its_target() {
+    let v = stdout_json(&radcol(&[
+        "solve",
+        "shadow",
+        "--target-error",
+        "1e-2",
+        "--json",
+    ]));
+    let ad = &v["adaptive"];
+    assert_eq!(ad["stop"], "reached", "{ad}");
+    assert!(num(ad, "reached_estimate") <= 1e-2);
+    assert_eq!(v["visibility"]["needed"], true);
+    for ch in v["channels"].as_array().unwrap() {
+        assert!(num(&ch["estimate"], "max_rel") <= 1e-2, "{ch}");
+    }
+}
+
 /// (position, normal, radiosity per channel) of every vertex of a radcol PLY.
 fn read_ply(path: &str) -> Vec<([f64; 3], [f64; 3], Vec<f64>)> {
     use ply_rs_bw::parser::Parser;

@@ -35,6 +35,12 @@ use crate::solution::Solution;
 use rayon::prelude::*;
 use serde::Serialize;
 
+/// The element-integral tolerance of the check rows (the solve's own when
+/// looser): η is wanted to a few digits, and an integral error of 1e-9
+/// relative to a row whose entries sum to at most 1 moves η by at most
+/// 1e-9 max |u_n|, far below any error worth estimating.
+pub const ESTIMATE_QUAD_TOL: f64 = 1e-9;
+
 /// α of the check points (and the alternative when the solution's own α is
 /// too close to it for the points to differ from the nodes).
 const CHECK_ALPHA: [f64; 2] = [0.05, 0.12];

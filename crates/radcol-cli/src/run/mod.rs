@@ -47,11 +47,19 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
             None,
         ),
         Some(opts) => {
-            let res = solve_adaptive(&s.problem, &s.cfg, opts, s.backend.as_ref(), |step| {
-                if let Some(b) = &bar {
-                    b.note(&AdaptLine(step).to_string());
-                }
-            })
+            // Each step as it ends: above the bar on a terminal, else on
+            // stderr (a long run's log shows its progress; JSON has them all).
+            let res = solve_adaptive(
+                &s.problem,
+                &s.cfg,
+                opts,
+                s.backend.as_ref(),
+                |step| match &bar {
+                    Some(b) => b.note(&AdaptLine(step).to_string()),
+                    None if !s.json => eprintln!("{}", AdaptLine(step)),
+                    None => {}
+                },
+            )
             .map_err(with_flags)?;
             let report = AdaptReport::new(opts, &res);
             (res.outcome, Some(report))

@@ -2,10 +2,11 @@
 
 use super::size::{mesh_size, MemoryEstimate};
 use super::{ChannelResult, SolveConfig, SolveOutcome, SolverKind, SolverReport, Timings};
+use crate::assembly::QuadratureOptions;
 use crate::assembly::{Assembled, AssemblyBackend, AssemblyPlan};
 use crate::discretization::Discretization;
 use crate::error::{Error, InputError};
-use crate::estimate::{check_nodes, estimate, ChannelFields};
+use crate::estimate::{check_nodes, estimate, ChannelFields, ESTIMATE_QUAD_TOL};
 use crate::mesh::Mesh;
 use crate::nodes::NodeSet;
 use crate::norms::error_norms;
@@ -198,7 +199,11 @@ fn estimate_channels(
     let nodes = check_nodes(disc.nodes().degree(), disc.nodes().alpha());
     let check = Arc::new(Discretization::new(disc.mesh().clone(), nodes));
     let check_fields = fields(&check, problem)?;
-    let plan = AssemblyPlan::with_progress(check, cfg.quad.clone(), visibility, None);
+    let quad = QuadratureOptions {
+        tol: cfg.quad.tol.max(ESTIMATE_QUAD_TOL),
+        ..cfg.quad.clone()
+    };
+    let plan = AssemblyPlan::with_progress(check, quad, visibility, None);
     let inputs: Vec<ChannelFields<'_>> = channels
         .iter()
         .zip(&check_fields)

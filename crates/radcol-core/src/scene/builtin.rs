@@ -16,6 +16,10 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
         "an empty 4 x 3 x 5 m box room with white walls and a 1 x 1 m ceiling light (convex: no visibility tests)",
     ),
     (
+        "shadow",
+        "a floor lit by a square light through a floating square occluder (umbra and penumbra; exact answer by Lambert's formula)",
+    ),
+    (
         "plates",
         "two facing unit squares one unit apart, the top one emitting (mirror-image triangulations)",
     ),
@@ -47,6 +51,19 @@ pub fn builtin(name: &str) -> Option<Result<Scene, SceneError>> {
                 target: DVec3::new(2.0, 1.3, 5.0),
                 up: DVec3::Y,
                 fov_y_deg: 60.0,
+            },
+        ),
+        "shadow" => (
+            include_str!("../../../../scenes/shadow.obj"),
+            "shadow.mtl",
+            include_str!("../../../../scenes/shadow.mtl"),
+            // Between the occluder's and the light's heights, off a corner:
+            // the shadow and the light's underside.
+            Camera {
+                eye: DVec3::new(-1.9, -1.5, 0.5),
+                target: DVec3::new(0.1, 0.0, 0.0),
+                up: DVec3::Z,
+                fov_y_deg: 50.0,
             },
         ),
         "plates" => (

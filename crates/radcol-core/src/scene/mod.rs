@@ -29,11 +29,13 @@
 
 mod builder;
 mod builtin;
+pub mod imprint;
 mod obj;
 mod validate;
 
 pub use builder::SceneBuilder;
 pub use builtin::{builtin, BUILTIN_SCENES};
+pub use imprint::Imprinted;
 pub use obj::{load_obj, load_obj_str};
 
 use crate::camera::Camera;
@@ -236,6 +238,9 @@ pub struct Scene {
     pub warnings: Vec<String>,
     /// The file the scene was read from.
     pub source: Option<PathBuf>,
+    /// Contact lines imprinted on the faces they rest on ([`imprint`]); the
+    /// triangle count of the scene includes the pieces.
+    pub imprinted: Imprinted,
 }
 
 impl Scene {

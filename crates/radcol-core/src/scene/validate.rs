@@ -145,6 +145,7 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
     let tris: Vec<[DVec3; 3]> = kept.iter().map(|t| t.vertices).collect();
     non_manifold_edges(&tris, &kept, &mut warnings);
     t_junctions(&tris, &kept, scale, &mut warnings);
+    let (kept, imprinted) = super::imprint::contact_lines(kept, scale);
 
     let (patches, patch_material) = patches_by_group(&kept, &materials);
     let surface = Surface {
@@ -160,6 +161,7 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
         camera,
         warnings,
         source,
+        imprinted,
     })
 }
 

@@ -1,0 +1,158 @@
+//! Contact lines: a cube resting on a floor whose two triangles ignore it,
+//! as user scenes have them. u jumps along the footprint (0 under the cube,
+//! lit beside it); radcol imprints the footprint on the floor when the scene
+//! is built (`radcol_core::scene::imprint`), so the jump falls on element
+//! edges at every level. Measured: the estimated max error on uniform levels
+//! with the imprinted scene and with the same triangles as given.
+
+use glam::DVec3;
+use radcol_core::assembly::CpuBackend;
+use radcol_core::geometry::{Identity, Patch, Surface};
+use radcol_core::problem::{Field, Problem};
+use radcol_core::run::adapt::{solve_adaptive, AdaptOptions};
+use radcol_core::run::{solve, SolveConfig};
+use radcol_core::scene::{Material, SceneBuilder};
+use std::sync::Arc;
+
+/// (group, triangles front counter-clockwise, ρ, E).
+type Group = (&'static str, Vec<[DVec3; 3]>, f64, f64);
+
+fn quad(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> Vec<[DVec3; 3]> {
+    vec![[a, b, c], [a, c, d]]
+}
+
+fn groups() -> Vec<Group> {
+    let v = DVec3::new;
+    let floor = quad(v(0., 0., 0.), v(4., 0., 0.), v(4., 4., 0.), v(0., 4., 0.));
+    // Off the dyadic lines of the floor's refinement (0.5, 0.25, …).
+    let (lo, hi, h) = (1.37, 2.41, 1.0);
+    // Four sides facing out (corners counter-clockwise seen from above, each
+    // side from one corner to the next) and a top facing up; no bottom (it
+    // rests on the floor).
+    let corners = [(lo, lo), (hi, lo), (hi, hi), (lo, hi)];
+    let mut cube = Vec::new();
+    for k in 0..4 {
+        let ((x0, y0), (x1, y1)) = (corners[k], corners[(k + 1) % 4]);
+        cube.extend(quad(
+            v(x0, y0, 0.),
+            v(x1, y1, 0.),
+            v(x1, y1, h),
+            v(x0, y0, h),
+        ));
+    }
+    cube.extend(quad(v(lo, lo, h), v(hi, lo, h), v(hi, hi, h), v(lo, hi, h)));
+    let light = quad(v(1., 1., 3.), v(1., 3., 3.), v(3., 3., 3.), v(3., 1., 3.));
+    vec![
+        ("floor", floor, 0.7, 0.0),
+        ("cube", cube, 0.7, 0.0),
+        ("light", light, 0.0, 5.0),
+    ]
+}
+
+/// The scene through the builder: imprinted.
+fn imprinted() -> Problem {
+    let mut b = SceneBuilder::new("cube on floor");
+    for (name, tris, rho, e) in groups() {
+        let m = b
+            .add_material(Material {
+                name: name.into(),
+                rho: [rho; 3],
+                emission: [e; 3],
+            })
+            .unwrap();
+        let pos: Vec<DVec3> = tris.iter().flatten().copied().collect();
+        let idx: Vec<[u32; 3]> = (0..tris.len() as u32)
+            .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+            .collect();
+        b.add_mesh_f64(name, &pos, &idx, m).unwrap();
+    }
+    let scene = b.build().unwrap();
+    assert_eq!(scene.imprinted.triangles, 2, "{:?}", scene.imprinted);
+    let mut p = scene.problem();
+    p.channels.truncate(1);
+    p
+}
+
+/// The same triangles as given, one patch per group.
+fn as_given() -> Problem {
+    let g = groups();
+    let surface = Surface {
+        name: "cube on floor, as given".into(),
+        patches: g
+            .iter()
+            .map(|(name, tris, _, _)| Patch {
+                name: (*name).into(),
+                map: Arc::new(Identity),
+                triangles: tris.clone(),
+            })
+            .collect(),
+        convex_enclosure: false,
+    };
+    Problem::new(
+        Arc::new(surface),
+        Field::PerPatch(Arc::new(g.iter().map(|x| x.2).collect())),
+        Field::PerPatch(Arc::new(g.iter().map(|x| x.3).collect())),
+    )
+}
+
+/// Uniform levels 1 and 2 (r = 1): with the footprint imprinted the
+/// estimated max error is at least 2× smaller than with the floor as given,
+/// whose elements straddle the jump.
+#[test]
+fn imprinted_contact_lines_lower_the_error() {
+    for level in 1..=2 {
+        let cfg = SolveConfig {
+            degree: 1,
+            alpha: 1.0 / 6.0,
+            level,
+            ..Default::default()
+        };
+        let est = |p: &Problem| {
+            let out = solve(p, &cfg, &CpuBackend).unwrap();
+            let e = out.channels[0].estimate.clone().unwrap();
+            (out.discretization.len(), e.max_rel)
+        };
+        let (ni, ei) = est(&imprinted());
+        let (ng, eg) = est(&as_given());
+        println!(
+            "level {level}: imprinted {ni} unknowns, estimate {ei:.3e}; as given {ng} unknowns, estimate {eg:.3e}"
+        );
+        assert!(
+            eg > 2.0 * ei,
+            "level {level}: as given {eg:.3e}, imprinted {ei:.3e}"
+        );
+    }
+}
+
+/// Adaptive refinement on both (slow; run with `--ignored`). Measured at
+/// 0925d6f+: imprinted, the estimate falls to 8.7e-3 at 651 unknowns and then
+/// stays there for 15 steps while the same ~74 elements are split each time,
+/// then rises (5e-2 at 11 910 unknowns); as given it wanders between 2e-2
+/// and 6e-2. Something near the contact edge does not converge under local
+/// refinement (quadrature of near pairs on the CDT's thin triangles, or the
+/// estimate at a 90° concave edge): open work of issue 9.
+#[test]
+#[ignore]
+fn adaptive_refinement_at_a_contact_line() {
+    let cfg = SolveConfig {
+        degree: 1,
+        alpha: 1.0 / 6.0,
+        level: 1,
+        ..Default::default()
+    };
+    let opts = AdaptOptions {
+        target: 5e-3,
+        max_unknowns: Some(12_000),
+        ..Default::default()
+    };
+    for (label, p) in [("imprinted", imprinted()), ("as given", as_given())] {
+        let res = solve_adaptive(&p, &cfg, &opts, &CpuBackend, |s| {
+            println!(
+                "  {label}: {} unknowns, estimate {:.3e}, split {}",
+                s.unknowns, s.estimate, s.split
+            )
+        })
+        .unwrap();
+        println!("{label}: {:?}", res.stop);
+    }
+}
