@@ -49,7 +49,7 @@ fn read_points() -> Vec<RefPoint> {
 }
 
 /// The element holding `x` on its front side `n` (within 1e-3 scene units of
-/// its plane), and (s, t) there.
+/// its plane, projected onto it), and (s, t) there.
 fn find(mesh: &Mesh, x: DVec3, n: DVec3) -> Option<(usize, [f64; 2])> {
     (0..mesh.len()).find_map(|k| {
         let [a, b, c] = mesh.vertices(k);
@@ -58,7 +58,9 @@ fn find(mesh: &Mesh, x: DVec3, n: DVec3) -> Option<(usize, [f64; 2])> {
         if normal.dot(n) < 0.99 || off_plane > 1e-3 {
             return None;
         }
-        barycentric_st(a, b, c, x).map(|st| (k, st))
+        // The reference's coordinates are single precision: project first.
+        let on_plane = x - normal * (x - a).dot(normal);
+        barycentric_st(a, b, c, on_plane).map(|st| (k, st))
     })
 }
 

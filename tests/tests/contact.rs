@@ -124,13 +124,15 @@ fn imprinted_contact_lines_lower_the_error() {
     }
 }
 
-/// Adaptive refinement on both (slow; run with `--ignored`). Measured at
-/// 0925d6f+: imprinted, the estimate falls to 8.7e-3 at 651 unknowns and then
-/// stays there for 15 steps while the same ~74 elements are split each time,
-/// then rises (5e-2 at 11 910 unknowns); as given it wanders between 2e-2
-/// and 6e-2. Something near the contact edge does not converge under local
-/// refinement (quadrature of near pairs on the CDT's thin triangles, or the
-/// estimate at a 90° concave edge): open work of issue 9.
+/// Adaptive refinement on both (slow; run with `--ignored`). Measured before
+/// the depth limit existed: imprinted, the estimate fell to 8.7e-3 at 651
+/// unknowns and then stayed there for 15 steps while the same ~74 elements
+/// were split each time, then rose (5e-2 at 11 910 unknowns: rounding at 2^-20
+/// of the element size); as given it wandered between 2e-2 and 6e-2. The
+/// worst elements sit at the feet of the cube's corners, where walls, floor
+/// and the penumbra wedges of the vertical edges meet and u has a
+/// direction-dependent limit: no refinement lowers the max error there. Now
+/// the loop stops with `StopReason::Singular` at `max_depth`.
 #[test]
 #[ignore]
 fn adaptive_refinement_at_a_contact_line() {

@@ -39,8 +39,16 @@ impl AdaptReport {
 
     /// One sentence: what was reached and why the loop stopped.
     pub fn summary(&self) -> String {
+        let elsewhere = match self.steps.last() {
+            Some(s) if s.at_depth_limit > 0 => format!(
+                " ({} away from the {} elements at the depth limit)",
+                sci(s.estimate_elsewhere),
+                s.at_depth_limit
+            ),
+            _ => String::new(),
+        };
         format!(
-            "estimated error {} against the target {} after {} steps: {}",
+            "estimated error {}{elsewhere} against the target {} after {} steps: {}",
             sci(self.reached_estimate),
             sci(self.target),
             self.steps.len(),
@@ -71,7 +79,16 @@ impl fmt::Display for AdaptLine<'_> {
             } else {
                 String::new()
             }
-        )
+        )?;
+        if s.at_depth_limit > 0 {
+            write!(
+                f,
+                ", {} at the depth limit (elsewhere {})",
+                s.at_depth_limit,
+                sci(s.estimate_elsewhere)
+            )?;
+        }
+        Ok(())
     }
 }
 

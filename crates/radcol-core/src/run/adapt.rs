@@ -37,6 +37,13 @@ pub struct AdaptOptions {
     /// below 1, elements about to cross the target are split in the same
     /// step (fewer solves for a few more unknowns).
     pub mark_fraction: f64,
+    /// An element is split at most this many times beyond the starting
+    /// mesh. Where u has a direction-dependent limit at a point (the foot of
+    /// a block's corner on a floor: walls and penumbra wedges meet there, and
+    /// the configuration is self-similar), the max error of the elements
+    /// touching the point does not fall under any refinement; without a cap
+    /// the loop would grade towards the point until rounding breaks it.
+    pub max_depth: u32,
 }
 
 impl Default for AdaptOptions {
@@ -46,6 +53,7 @@ impl Default for AdaptOptions {
             max_unknowns: None,
             max_steps: 25,
             mark_fraction: 0.5,
+            max_depth: 10,
         }
     }
 }
@@ -72,6 +80,9 @@ pub enum StopReason {
     Memory,
     /// The step limit was reached.
     MaxSteps,
+    /// Every element above the target has been split `max_depth` times: the
+    /// error is concentrated at points where refinement no longer reduces it.
+    Singular,
 }
 
 impl std::fmt::Display for StopReason {
@@ -81,6 +92,7 @@ impl std::fmt::Display for StopReason {
             StopReason::MaxUnknowns => "the next step would exceed the unknowns budget",
             StopReason::Memory => "the next step's dense matrix would not fit in memory",
             StopReason::MaxSteps => "the step limit was reached",
+            StopReason::Singular => "the elements above the target are at the depth limit: the error there does not fall under refinement (typically a point where u has a direction-dependent limit, such as the foot of a block's corner on a floor)",
         })
     }
 }
@@ -100,6 +112,12 @@ pub struct AdaptStep {
     pub true_error: Option<f64>,
     /// Elements split after this step (0 on the last).
     pub split: usize,
+    /// Elements above the threshold left whole because they are at the
+    /// depth limit.
+    pub at_depth_limit: usize,
+    /// The estimate (relative max, worst channel) over the elements below
+    /// the depth limit: the error away from the singular points.
+    pub estimate_elsewhere: f64,
     /// Wall seconds of the solve, estimate included.
     pub seconds: f64,
 }
@@ -133,12 +151,22 @@ pub fn solve_adaptive(
     let mut mesh = discretize(problem, &cfg)?.mesh().clone();
     let f = crate::nodes::nodes_per_element(cfg.degree);
     let mut guess: Option<Vec<Vec<f64>>> = None;
+    let mut depth = vec![0u32; mesh.len()];
     let mut steps = Vec::new();
     loop {
         let t = Instant::now();
         let out = solve_on_mesh(problem, &cfg, mesh.clone(), backend, guess.as_deref())?;
         let indicator = indicators(&out);
         let (estimate, estimate_rms) = worst(&out);
+        let threshold = opts.mark_fraction * opts.target;
+        let capped = |k: usize| depth[k] >= opts.max_depth;
+        let at_depth_limit = (0..indicator.len())
+            .filter(|&k| capped(k) && indicator[k] > threshold)
+            .count();
+        let estimate_elsewhere = (0..indicator.len())
+            .filter(|&k| !capped(k))
+            .map(|k| indicator[k])
+            .fold(0.0f64, f64::max);
         let mut step = AdaptStep {
             elements: mesh.len(),
             unknowns: out.discretization.len(),
@@ -149,6 +177,8 @@ pub fn solve_adaptive(
                 c.errors.map(|e| e.global_max / scale)
             }),
             split: 0,
+            at_depth_limit,
+            estimate_elsewhere,
             seconds: t.elapsed().as_secs_f64(),
         };
         let stop = if estimate <= opts.target {
@@ -160,8 +190,9 @@ pub fn solve_adaptive(
         };
         let marked = match stop {
             Some(_) => Vec::new(),
-            None => mark(&indicator, opts.mark_fraction * opts.target),
+            None => mark(&indicator, threshold, &capped),
         };
+        let stop = stop.or((marked.is_empty()).then_some(StopReason::Singular));
         let budget = budget(opts, &cfg, mesh.len(), f, marked.len());
         let stop = stop.or(budget.err());
         let split = budget.map_or(0, |m| m.min(marked.len()));
@@ -177,6 +208,14 @@ pub fn solve_adaptive(
         }
         let (refined, parents) = refine(&mesh, &marked[..split]);
         guess = Some(transfer(&out, &refined, &parents));
+        let mut split_mark = vec![false; mesh.len()];
+        for &k in &marked[..split] {
+            split_mark[k] = true;
+        }
+        depth = parents
+            .iter()
+            .map(|&p| depth[p] + u32::from(split_mark[p]))
+            .collect();
         mesh = Arc::new(refined);
     }
 }
@@ -205,10 +244,10 @@ fn worst(out: &SolveOutcome) -> (f64, f64) {
         })
 }
 
-/// The elements above `threshold`, worst first.
-fn mark(indicator: &[f64], threshold: f64) -> Vec<usize> {
+/// The elements above `threshold` that may still be split, worst first.
+fn mark(indicator: &[f64], threshold: f64, capped: &dyn Fn(usize) -> bool) -> Vec<usize> {
     let mut marked: Vec<usize> = (0..indicator.len())
-        .filter(|&k| indicator[k] > threshold)
+        .filter(|&k| indicator[k] > threshold && !capped(k))
         .collect();
     marked.sort_by(|&a, &b| indicator[b].total_cmp(&indicator[a]));
     marked
@@ -317,6 +356,16 @@ mod tests {
             let c = refined.position(k, 1.0 / 3.0, 1.0 / 3.0);
             assert!(mesh.locate(c).is_some_and(|(q, _)| q == p));
         }
+    }
+
+    /// Marking takes the elements above the threshold, worst first, except
+    /// those at the depth limit.
+    #[test]
+    fn marking_skips_capped_elements() {
+        let ind = [0.1, 0.5, 0.01, 0.3, 0.2];
+        assert_eq!(mark(&ind, 0.15, &|_| false), vec![1, 3, 4]);
+        assert_eq!(mark(&ind, 0.15, &|k| k == 1), vec![3, 4]);
+        assert!(mark(&ind, 0.15, &|_| true).is_empty());
     }
 
     /// The budget splits the worst elements that fit, and says why none fit.

@@ -301,3 +301,58 @@ mod scene_tests {
         assert_eq!(scene.imprinted, super::Imprinted::default());
     }
 }
+
+#[cfg(test)]
+mod cube_tests {
+    use crate::scene::{Material, SceneBuilder};
+    use glam::DVec3;
+
+    /// A cube's footprint on a two-triangle floor: every floor piece lies
+    /// wholly inside or wholly outside the footprint, and the pieces tile
+    /// the floor.
+    #[test]
+    fn floor_pieces_do_not_cross_the_footprint() {
+        let (lo, hi) = (1.37, 2.41);
+        let v = DVec3::new;
+        let mut b = SceneBuilder::new("cube");
+        let m = b.add_material(Material::diffuse("grey", [0.5; 3])).unwrap();
+        let floor = [v(0., 0., 0.), v(4., 0., 0.), v(4., 4., 0.), v(0., 4., 0.)];
+        b.add_mesh_f64("floor", &floor, &[[0, 1, 2], [0, 2, 3]], m)
+            .unwrap();
+        let c = [(lo, lo), (hi, lo), (hi, hi), (lo, hi)];
+        for k in 0..4 {
+            let ((x0, y0), (x1, y1)) = (c[k], c[(k + 1) % 4]);
+            let wall = [v(x0, y0, 0.), v(x1, y1, 0.), v(x1, y1, 1.), v(x0, y0, 1.)];
+            b.add_mesh_f64("cube", &wall, &[[0, 1, 2], [0, 2, 3]], m)
+                .unwrap();
+        }
+        let scene = b.build().unwrap();
+        let floor_patch = &scene.surface.patches[0];
+        let inside =
+            |p: DVec3, e: f64| p.x > lo + e && p.x < hi - e && p.y > lo + e && p.y < hi - e;
+        let mut area = 0.0;
+        for t in &floor_patch.triangles {
+            let c = (t[0] + t[1] + t[2]) / 3.0;
+            let a = 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).z;
+            assert!(a > 0.0, "{t:?}");
+            area += a;
+            let centre_in = inside(c, 0.0);
+            for p in t {
+                // A vertex strictly on the other side of the line than the
+                // centroid means the piece crosses it.
+                if centre_in {
+                    assert!(
+                        p.x >= lo - 1e-12
+                            && p.x <= hi + 1e-12
+                            && p.y >= lo - 1e-12
+                            && p.y <= hi + 1e-12,
+                        "{t:?}"
+                    );
+                } else {
+                    assert!(!inside(*p, 1e-12), "{t:?}");
+                }
+            }
+        }
+        crate::assert_close!(area, 16.0, 1e-12);
+    }
+}
