@@ -184,7 +184,10 @@ pub struct SolveArgs {
 
     /// Refine adaptively until the estimated max error relative to max |u| is at most TOL
     /// (in (0, 1)): elements whose estimate is large are split 4:1 and the problem
-    /// re-solved, starting from --level/--max-edge [default: uniform refinement only].
+    /// re-solved, starting from --level/--max-edge; an element is split at most 10 times
+    /// (where the error does not fall under refinement, such as the foot of a block's
+    /// corner, the loop stops and reports the error elsewhere) [default: uniform
+    /// refinement only].
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub target_error: Option<f64>,
 
