@@ -82,6 +82,7 @@ struct SceneSummary {
     triangles: usize,
     materials: usize,
     emitters: Vec<String>,
+    imprinted: radcol_core::scene::Imprinted,
 }
 
 /// Everything `radcol solve` reports.
@@ -191,7 +192,7 @@ impl SolveReport {
                 .collect(),
             out: written.to_vec(),
             adaptive: None,
-            warnings: super::adapt::solve_warnings(s, out),
+            warnings: solve_warnings(s, out),
             contents: scene.map(|sc| SceneSummary {
                 triangles: sc.triangle_count(),
                 materials: sc.materials.len(),
@@ -201,6 +202,7 @@ impl SolveReport {
                     .filter(|m| m.is_emitter())
                     .map(|m| m.name.clone())
                     .collect(),
+                imprinted: sc.imprinted,
             }),
         }
     }
@@ -340,6 +342,13 @@ impl fmt::Display for SolveReport {
                     sc.emitters.join(", ")
                 }
             )?;
+            if sc.imprinted.triangles > 0 {
+                writeln!(
+                    f,
+                    "              contact lines imprinted: {} segments split {} triangles",
+                    sc.imprinted.segments, sc.imprinted.triangles
+                )?;
+            }
         }
         writeln!(f, "  visibility  {}", self.visibility.reason)?;
         writeln!(f, "  backend     {}", self.backend)?;
@@ -368,4 +377,50 @@ impl fmt::Display for SolveReport {
         }
         Ok(())
     }
+}
+
+/// Warnings about the trustworthiness of a solve: ill-conditioned
+/// interpolation (the Lebesgue constant of the nodes), an inaccurate linear
+/// solve (the true residual), and a large estimated error. Each says what to
+/// change.
+fn solve_warnings(s: &crate::setup::Setup, out: &radcol_core::run::SolveOutcome) -> Vec<String> {
+    let mut w = Vec::new();
+    let r = s.cfg.degree;
+    if r > 0 {
+        let lebesgue = |a: f64| {
+            radcol_core::nodes::NodeSet::new(r, a).map_or(f64::INFINITY, |n| n.lebesgue_constant())
+        };
+        let here = lebesgue(s.cfg.alpha);
+        let auto = s.alpha.a0.auto_alpha();
+        let best = lebesgue(auto);
+        if here > 10.0 && here > 2.0 * best {
+            w.push(format!(
+                "α = {}: its nodes have Lebesgue constant {here:.1} (interpolation amplifies errors up to that much; \
+                 collocation near edges is stable roughly while ρ·Λ·cos²(θ/2) < 1); --alpha auto ({auto:.6}) has {best:.1}",
+                s.cfg.alpha
+            ));
+        }
+    }
+    let tol = s.cfg.gmres.rel_tol;
+    for ch in &out.channels {
+        if ch.solver.residual > (1e3 * tol).max(1e-8) {
+            w.push(format!(
+                "channel {}: the linear solve's true relative residual is {} (asked {}): the system is badly \
+                 conditioned; try a smaller α, a lower degree or --solver gmres with more --max-iters",
+                ch.name,
+                sci(ch.solver.residual),
+                sci(tol)
+            ));
+        }
+        if let Some(e) = &ch.estimate {
+            if e.max_rel > 0.1 {
+                w.push(format!(
+                    "channel {}: estimated error {} of max |u|: refine (--level, --max-edge or --target-error)",
+                    ch.name,
+                    sci(e.max_rel)
+                ));
+            }
+        }
+    }
+    w
 }

@@ -59,7 +59,7 @@ impl Default for AdaptOptions {
 }
 
 impl AdaptOptions {
-    /// Refuses a target outside (0, 1) and a zero budget.
+    /// Refuses a target outside (0, 1).
     pub fn check(&self) -> Result<(), InputError> {
         if !(self.target > 0.0 && self.target < 1.0) {
             return Err(InputError::TargetError { value: self.target });
