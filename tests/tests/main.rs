@@ -15,6 +15,7 @@ mod gpu_conformance;
 mod gpu_select;
 mod gpu_solve;
 mod house;
+mod reuse;
 mod scenes;
 mod shadows;
 mod solvers_agree;

@@ -91,6 +91,11 @@ pub struct ErrorEstimate {
     /// light is unphysical), absolute; length n.
     #[serde(skip)]
     pub elements: Vec<f64>,
+    /// Per element: whether u_n < 0 somewhere on its lattice while negative
+    /// light is unphysical (the adaptive loop splits these whatever their
+    /// size); length n.
+    #[serde(skip)]
+    pub negative: Vec<bool>,
 }
 
 impl ErrorEstimate {
@@ -194,9 +199,10 @@ fn summarise(
         (e, ch.solution.eval(k, st[0], st[1]))
     };
     let mut elements = vec![0.0f64; mesh.len()];
+    let mut negative = vec![false; mesh.len()];
     let (mut max, mut l2sq, mut scale) = (0.0f64, 0.0, 0.0f64);
     let (mut min_value, mut negative_points) = (f64::INFINITY, 0);
-    for (k, elem) in elements.iter_mut().enumerate() {
+    for (k, (elem, neg)) in elements.iter_mut().zip(&mut negative).enumerate() {
         let mut e_max = 0.0f64;
         let mut most_negative = 0.0f64;
         for &st in &lattice {
@@ -214,6 +220,7 @@ fn summarise(
             l2sq += w * mesh.point(k, st[0], st[1]).jacobian * e * e;
         }
         max = max.max(e_max);
+        *neg = nonneg && most_negative > 0.0;
         *elem = if nonneg {
             e_max.max(most_negative)
         } else {
@@ -237,6 +244,7 @@ fn summarise(
         min_value,
         nonnegative_problem: nonneg,
         elements,
+        negative,
     }
 }
 

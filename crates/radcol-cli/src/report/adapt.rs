@@ -80,6 +80,9 @@ impl fmt::Display for AdaptLine<'_> {
                 String::new()
             }
         )?;
+        if s.negative_elements > 0 {
+            write!(f, ", {} with u < 0", s.negative_elements)?;
+        }
         if s.at_depth_limit > 0 {
             write!(
                 f,

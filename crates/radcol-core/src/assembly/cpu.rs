@@ -21,25 +21,46 @@ impl AssemblyBackend for CpuBackend {
     }
 
     fn assemble(&self, plan: &AssemblyPlan) -> Result<Assembled, Error> {
-        let start = Instant::now();
-        let n_dim = plan.dim();
-        let f = plan.discretization().nodes_per_element();
-        let mut matrix = DenseMatrix::zeros(n_dim, n_dim);
-        let kernel_evals = if n_dim == 0 {
-            0
-        } else {
-            matrix
-                .as_mut_slice()
-                .par_chunks_exact_mut(f * n_dim)
-                .enumerate()
-                .map(|(kp, block)| plan.fill_block(kp, block, FillMode::All))
-                .sum()
-        };
-        Ok(Assembled {
-            matrix,
-            kernel_evals,
-            device_seconds: None,
-            wall_seconds: start.elapsed().as_secs_f64(),
-        })
+        Ok(fill(plan, None))
+    }
+
+    fn assemble_reusing(
+        &self,
+        plan: &AssemblyPlan,
+        previous: &DenseMatrix,
+    ) -> Result<Assembled, Error> {
+        Ok(fill(plan, Some(previous)))
+    }
+}
+
+/// The matrix of `plan`, with the pairs of unchanged elements copied from
+/// `previous` when given and the plan was updated.
+fn fill(plan: &AssemblyPlan, previous: Option<&DenseMatrix>) -> Assembled {
+    let start = Instant::now();
+    let n_dim = plan.dim();
+    let f = plan.discretization().nodes_per_element();
+    let mut matrix = DenseMatrix::zeros(n_dim, n_dim);
+    let mode = match (previous, plan.unchanged()) {
+        (Some(prev), Some(u)) => {
+            u.copy_blocks(prev, &mut matrix, f);
+            FillMode::NotReused
+        }
+        _ => FillMode::All,
+    };
+    let kernel_evals = if n_dim == 0 {
+        0
+    } else {
+        matrix
+            .as_mut_slice()
+            .par_chunks_exact_mut(f * n_dim)
+            .enumerate()
+            .map(|(kp, block)| plan.fill_block(kp, block, mode))
+            .sum()
+    };
+    Assembled {
+        matrix,
+        kernel_evals,
+        device_seconds: None,
+        wall_seconds: start.elapsed().as_secs_f64(),
     }
 }

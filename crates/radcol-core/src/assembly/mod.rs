@@ -17,7 +17,7 @@ pub mod plan;
 
 pub use cpu::CpuBackend;
 pub use integrate::{ElementIntegrator, FieldPoint, QuadratureOptions, VisibilityMode};
-pub use plan::{AssemblyPlan, FarTable, FillMode, PairClass, PlanStats};
+pub use plan::{AssemblyPlan, FarTable, FillMode, PairClass, PlanStats, Unchanged};
 
 pub use crate::backend::{BackendKind, Scalar};
 
@@ -62,4 +62,18 @@ pub trait AssemblyBackend: Send + Sync {
     fn info(&self) -> BackendInfo;
     /// Fills the geometric matrix of `plan`.
     fn assemble(&self, plan: &AssemblyPlan) -> Result<Assembled, Error>;
+
+    /// Fills the geometric matrix of `plan`, a plan built by
+    /// [`AssemblyPlan::updating`], whose pairs of unchanged elements may be
+    /// copied from `previous` (the matrix of the plan it was updated from)
+    /// instead of computed: the result is the same matrix. This default
+    /// computes every entry; [`CpuBackend`] copies.
+    fn assemble_reusing(
+        &self,
+        plan: &AssemblyPlan,
+        previous: &DenseMatrix,
+    ) -> Result<Assembled, Error> {
+        let _ = previous;
+        self.assemble(plan)
+    }
 }

@@ -8,12 +8,15 @@
 //! replace their parent in place, which keeps the elements of a base
 //! triangle consecutive and in refinement order (what the occlusion walk
 //! reads). Each new solve starts GMRES from the previous solution evaluated
-//! at the new nodes.
+//! at the new nodes, and takes the classes, occluder candidates and matrix
+//! entries of pairs of unchanged elements from the previous solve
+//! ([`AssemblyPlan::updating`](crate::assembly::AssemblyPlan::updating)):
+//! only the rows and columns of new elements are integrated.
 
-use super::pipeline::solve_on_mesh;
+use super::pipeline::{solve_step, Plans, Previous};
 use super::size::MemoryEstimate;
 use super::{discretize, SolveConfig, SolveOutcome};
-use crate::assembly::AssemblyBackend;
+use crate::assembly::{AssemblyBackend, Unchanged};
 use crate::error::{Error, InputError};
 use crate::geometry::barycentric_st;
 use crate::mesh::Mesh;
@@ -112,6 +115,8 @@ pub struct AdaptStep {
     pub true_error: Option<f64>,
     /// Elements split after this step (0 on the last).
     pub split: usize,
+    /// Elements where u_n < 0 somewhere although E, ρ ≥ 0.
+    pub negative_elements: usize,
     /// Elements above the threshold left whole because they are at the
     /// depth limit.
     pub at_depth_limit: usize,
@@ -153,16 +158,38 @@ pub fn solve_adaptive(
     let mut guess: Option<Vec<Vec<f64>>> = None;
     let mut depth = vec![0u32; mesh.len()];
     let mut steps = Vec::new();
+    // The previous solve, its plans and which elements it shares with this
+    // mesh: pairs of unchanged elements are neither classified nor
+    // integrated again.
+    let mut previous: Option<(SolveOutcome, Plans, Arc<Unchanged>)> = None;
     loop {
         let t = Instant::now();
-        let out = solve_on_mesh(problem, &cfg, mesh.clone(), backend, guess.as_deref())?;
-        let indicator = indicators(&out);
+        let prev = previous
+            .as_ref()
+            .map(|(outcome, plans, unchanged)| Previous {
+                outcome,
+                plans,
+                unchanged: unchanged.clone(),
+            });
+        let (out, plans) = solve_step(
+            problem,
+            &cfg,
+            mesh.clone(),
+            backend,
+            guess.as_deref(),
+            prev.as_ref(),
+        )?;
+        drop(prev);
+        // The old matrix goes before the estimate of the next step is read.
+        drop(previous.take());
+        let (indicator, negative) = indicators(&out);
         let (estimate, estimate_rms) = worst(&out);
         let threshold = opts.mark_fraction * opts.target;
         let capped = |k: usize| depth[k] >= opts.max_depth;
         let at_depth_limit = (0..indicator.len())
             .filter(|&k| capped(k) && indicator[k] > threshold)
             .count();
+        let negative_elements = negative.iter().filter(|&&b| b).count();
         let estimate_elsewhere = (0..indicator.len())
             .filter(|&k| !capped(k))
             .map(|k| indicator[k])
@@ -177,6 +204,7 @@ pub fn solve_adaptive(
                 c.errors.map(|e| e.global_max / scale)
             }),
             split: 0,
+            negative_elements,
             at_depth_limit,
             estimate_elsewhere,
             seconds: t.elapsed().as_secs_f64(),
@@ -216,22 +244,31 @@ pub fn solve_adaptive(
             .iter()
             .map(|&p| depth[p] + u32::from(split_mark[p]))
             .collect();
+        let old_of: Vec<Option<usize>> = parents
+            .iter()
+            .map(|&p| (!split_mark[p]).then_some(p))
+            .collect();
+        let unchanged = Arc::new(Unchanged::new(&old_of, mesh.len()));
+        previous = Some((out, plans, unchanged));
         mesh = Arc::new(refined);
     }
 }
 
-/// Per element, the worst channel's estimate relative to its max |u_n|.
-fn indicators(out: &SolveOutcome) -> Vec<f64> {
+/// Per element, the worst channel's estimate relative to its max |u_n|, and
+/// whether some channel has unphysical negative values on it.
+fn indicators(out: &SolveOutcome) -> (Vec<f64>, Vec<bool>) {
     let n = out.discretization.mesh().len();
     let mut ind = vec![0.0f64; n];
-    for ch in &out.channels {
-        if let Some(e) = &ch.estimate {
-            for (i, v) in ind.iter_mut().zip(e.elements_rel()) {
-                *i = i.max(v);
-            }
+    let mut negative = vec![false; n];
+    for e in out.channels.iter().filter_map(|c| c.estimate.as_ref()) {
+        for (i, v) in ind.iter_mut().zip(e.elements_rel()) {
+            *i = i.max(v);
+        }
+        for (a, &b) in negative.iter_mut().zip(&e.negative) {
+            *a |= b;
         }
     }
-    ind
+    (ind, negative)
 }
 
 /// The worst channel's relative max and rms estimates.
@@ -245,6 +282,10 @@ fn worst(out: &SolveOutcome) -> (f64, f64) {
 }
 
 /// The elements above `threshold` that may still be split, worst first.
+/// (Negative u_n is part of the indicator, as |u_n|; splitting an element
+/// only because it has some does not remove them: on the Cornell box the
+/// elements with u_n < 0 sit at the feet of the blocks, where 10 splits of
+/// each left 32 of 37 negative.)
 fn mark(indicator: &[f64], threshold: f64, capped: &dyn Fn(usize) -> bool) -> Vec<usize> {
     let mut marked: Vec<usize> = (0..indicator.len())
         .filter(|&k| indicator[k] > threshold && !capped(k))

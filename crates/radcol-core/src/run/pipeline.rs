@@ -3,7 +3,7 @@
 use super::size::{mesh_size, MemoryEstimate};
 use super::{ChannelResult, SolveConfig, SolveOutcome, SolverKind, SolverReport, Timings};
 use crate::assembly::QuadratureOptions;
-use crate::assembly::{Assembled, AssemblyBackend, AssemblyPlan};
+use crate::assembly::{Assembled, AssemblyBackend, AssemblyPlan, Unchanged};
 use crate::discretization::Discretization;
 use crate::error::{Error, InputError};
 use crate::estimate::{check_nodes, estimate, ChannelFields, ESTIMATE_QUAD_TOL};
@@ -163,37 +163,65 @@ fn solve_channels(
     Ok(channels)
 }
 
+/// The plans of one solve, kept by the adaptive loop so that the next
+/// solve, on a mesh refined from this one, reuses their unchanged pairs.
+pub(crate) struct Plans {
+    solve: AssemblyPlan,
+    check: Option<AssemblyPlan>,
+}
+
+/// What a solve on a refined mesh takes from the solve of the mesh it was
+/// refined from: plans and geometric matrix, for the pairs of `unchanged`
+/// elements.
+pub(crate) struct Previous<'a> {
+    pub(crate) outcome: &'a SolveOutcome,
+    pub(crate) plans: &'a Plans,
+    pub(crate) unchanged: Arc<Unchanged>,
+}
+
 /// Plans the assembly (with `visibility`, decided by the caller) and fills
-/// the geometric matrix on `backend`.
+/// the geometric matrix on `backend`, reusing `previous`'s unchanged pairs.
 fn assemble(
     disc: &Arc<Discretization>,
     cfg: &SolveConfig,
     visibility: &VisibilityAnalysis,
     backend: &dyn AssemblyBackend,
+    previous: Option<&Previous<'_>>,
 ) -> Result<(AssemblyPlan, Assembled), Error> {
-    let plan = AssemblyPlan::with_progress(
-        disc.clone(),
-        cfg.quad.clone(),
-        visibility,
-        cfg.progress.clone(),
-    );
+    let progress = cfg.progress.clone();
+    let plan = match previous {
+        Some(p) => AssemblyPlan::updating(
+            disc.clone(),
+            cfg.quad.clone(),
+            visibility,
+            progress,
+            &p.plans.solve,
+            p.unchanged.clone(),
+        ),
+        None => AssemblyPlan::with_progress(disc.clone(), cfg.quad.clone(), visibility, progress),
+    };
     if let Some(p) = &cfg.progress {
         p.start("assembly", disc.mesh().len() as u64);
     }
-    let assembled = backend.assemble(&plan)?;
+    let assembled = match previous {
+        Some(p) => backend.assemble_reusing(&plan, &p.outcome.matrix)?,
+        None => backend.assemble(&plan)?,
+    };
     Ok((plan, assembled))
 }
 
 /// Estimates every channel's error at the check points of its mesh
-/// ([`crate::estimate`]), with the solve's quadrature and visibility.
+/// ([`crate::estimate`]), with the solve's quadrature and visibility; returns
+/// the check points' plan.
 fn estimate_channels(
     problem: &Problem,
     cfg: &SolveConfig,
     visibility: &VisibilityAnalysis,
     channels: &mut [ChannelResult],
-) -> Result<(), Error> {
+    previous: Option<&Previous<'_>>,
+) -> Result<Option<AssemblyPlan>, Error> {
     let Some(first) = channels.first() else {
-        return Ok(());
+        return Ok(None);
     };
     let disc = first.solution.discretization();
     let nodes = check_nodes(disc.nodes().degree(), disc.nodes().alpha());
@@ -203,7 +231,12 @@ fn estimate_channels(
         tol: cfg.quad.tol.max(ESTIMATE_QUAD_TOL),
         ..cfg.quad.clone()
     };
-    let plan = AssemblyPlan::with_progress(check, quad, visibility, None);
+    let plan = match previous.and_then(|p| p.plans.check.as_ref().map(|c| (c, p))) {
+        Some((old, p)) => {
+            AssemblyPlan::updating(check, quad, visibility, None, old, p.unchanged.clone())
+        }
+        None => AssemblyPlan::with_progress(check, quad, visibility, None),
+    };
     let inputs: Vec<ChannelFields<'_>> = channels
         .iter()
         .zip(&check_fields)
@@ -218,7 +251,7 @@ fn estimate_channels(
     for (ch, e) in channels.iter_mut().zip(estimates) {
         ch.estimate = Some(e);
     }
-    Ok(())
+    Ok(Some(plan))
 }
 
 /// Solves `problem` with `cfg`, assembling on `backend`.
@@ -231,7 +264,15 @@ pub fn solve(
     let visibility = visibility::analyze(&problem.surface);
     visibility.check_supported()?;
     let disc = discretize(problem, cfg)?;
-    solve_discretized(problem, cfg, disc, backend, &visibility, None, t0)
+    let stages = Stages {
+        problem,
+        cfg,
+        backend,
+        visibility: &visibility,
+        guess: None,
+        previous: None,
+    };
+    Ok(stages.run(disc, t0)?.0)
 }
 
 /// Solves `problem` on a mesh built by the caller (a locally refined one, for
@@ -245,6 +286,19 @@ pub fn solve_on_mesh(
     backend: &dyn AssemblyBackend,
     guess: Option<&[Vec<f64>]>,
 ) -> Result<SolveOutcome, Error> {
+    Ok(solve_step(problem, cfg, mesh, backend, guess, None)?.0)
+}
+
+/// [`solve_on_mesh`], reusing what `previous` has for the pairs of unchanged
+/// elements, and returning the plans for the next step.
+pub(crate) fn solve_step(
+    problem: &Problem,
+    cfg: &SolveConfig,
+    mesh: Arc<Mesh>,
+    backend: &dyn AssemblyBackend,
+    guess: Option<&[Vec<f64>]>,
+    previous: Option<&Previous<'_>>,
+) -> Result<(SolveOutcome, Plans), Error> {
     let t0 = Instant::now();
     let visibility = visibility::analyze(&problem.surface);
     visibility.check_supported()?;
@@ -254,67 +308,83 @@ pub fn solve_on_mesh(
         MemoryEstimate::new(unknowns).check(cfg.solver)?;
     }
     let disc = Arc::new(Discretization::new(mesh, nodes));
-    solve_discretized(problem, cfg, disc, backend, &visibility, guess, t0)
+    let stages = Stages {
+        problem,
+        cfg,
+        backend,
+        visibility: &visibility,
+        guess,
+        previous,
+    };
+    stages.run(disc, t0)
 }
 
-/// The stages after the discretization.
-fn solve_discretized(
-    problem: &Problem,
-    cfg: &SolveConfig,
-    disc: Arc<Discretization>,
-    backend: &dyn AssemblyBackend,
-    visibility: &VisibilityAnalysis,
-    guess: Option<&[Vec<f64>]>,
-    t0: Instant,
-) -> Result<SolveOutcome, Error> {
-    let visibility = visibility.clone();
-    let h = disc.mesh().h();
-    let mesh_s = t0.elapsed().as_secs_f64();
+/// The stages after the discretization, and what they share.
+struct Stages<'a> {
+    problem: &'a Problem,
+    cfg: &'a SolveConfig,
+    backend: &'a dyn AssemblyBackend,
+    visibility: &'a VisibilityAnalysis,
+    guess: Option<&'a [Vec<f64>]>,
+    previous: Option<&'a Previous<'a>>,
+}
 
-    let t = Instant::now();
-    let fields = fields(&disc, problem)?;
-    let rhs_s = t.elapsed().as_secs_f64();
+impl Stages<'_> {
+    fn run(&self, disc: Arc<Discretization>, t0: Instant) -> Result<(SolveOutcome, Plans), Error> {
+        let (problem, cfg) = (self.problem, self.cfg);
+        let visibility = self.visibility.clone();
+        let h = disc.mesh().h();
+        let mesh_s = t0.elapsed().as_secs_f64();
 
-    let t = Instant::now();
-    let (plan, assembled) = assemble(&disc, cfg, &visibility, backend)?;
-    let assembly_s = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let fields = fields(&disc, problem)?;
+        let rhs_s = t.elapsed().as_secs_f64();
 
-    let t = Instant::now();
-    let mut channels = solve_channels(problem, cfg, &disc, &assembled.matrix, fields, guess)?;
-    let solve_s = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let (plan, assembled) = assemble(&disc, cfg, &visibility, self.backend, self.previous)?;
+        let assembly_s = t.elapsed().as_secs_f64();
 
-    let t = Instant::now();
-    if let (Some(exact), Some(first)) = (&problem.exact, channels.first_mut()) {
-        first.errors = Some(error_norms(&first.solution, exact));
+        let t = Instant::now();
+        let mut channels =
+            solve_channels(problem, cfg, &disc, &assembled.matrix, fields, self.guess)?;
+        let solve_s = t.elapsed().as_secs_f64();
+
+        let t = Instant::now();
+        if let (Some(exact), Some(first)) = (&problem.exact, channels.first_mut()) {
+            first.errors = Some(error_norms(&first.solution, exact));
+        }
+        let errors_s = t.elapsed().as_secs_f64();
+
+        let t = Instant::now();
+        let check = if cfg.estimate {
+            estimate_channels(problem, cfg, &visibility, &mut channels, self.previous)?
+        } else {
+            None
+        };
+        let estimate_s = t.elapsed().as_secs_f64();
+
+        let outcome = SolveOutcome {
+            h,
+            backend: self.backend.info(),
+            plan: plan.stats(),
+            visibility,
+            kernel_evals: assembled.kernel_evals,
+            device_seconds: assembled.device_seconds,
+            matrix: assembled.matrix,
+            discretization: disc,
+            channels,
+            timings: Timings {
+                mesh_s,
+                rhs_s,
+                assembly_s,
+                solve_s,
+                errors_s,
+                estimate_s,
+                total_s: t0.elapsed().as_secs_f64(),
+            },
+        };
+        Ok((outcome, Plans { solve: plan, check }))
     }
-    let errors_s = t.elapsed().as_secs_f64();
-
-    let t = Instant::now();
-    if cfg.estimate {
-        estimate_channels(problem, cfg, &visibility, &mut channels)?;
-    }
-    let estimate_s = t.elapsed().as_secs_f64();
-
-    Ok(SolveOutcome {
-        h,
-        backend: backend.info(),
-        plan: plan.stats(),
-        visibility,
-        kernel_evals: assembled.kernel_evals,
-        device_seconds: assembled.device_seconds,
-        matrix: assembled.matrix,
-        discretization: disc,
-        channels,
-        timings: Timings {
-            mesh_s,
-            rhs_s,
-            assembly_s,
-            solve_s,
-            errors_s,
-            estimate_s,
-            total_s: t0.elapsed().as_secs_f64(),
-        },
-    })
 }
 
 /// ‖b - A x‖ / ‖b‖ (‖A x‖-free: 0 when b = 0 and x = 0).

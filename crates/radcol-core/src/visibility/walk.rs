@@ -20,6 +20,49 @@ pub(crate) struct PartialRow {
 }
 
 impl PartialRow {
+    /// This row's pairs whose element `map` sends to a new index (the
+    /// others dropped), with their candidates; `map` must keep the order.
+    pub(crate) fn remapped(&self, map: impl Fn(usize) -> Option<usize>) -> PartialRow {
+        let mut out = PartialRow::default();
+        for (i, &k) in self.elements.iter().enumerate() {
+            if let Some(nk) = map(k as usize) {
+                let (start, len) = self.ranges[i];
+                out.push(nk, &self.candidates[start as usize..(start + len) as usize]);
+            }
+        }
+        out
+    }
+
+    /// The pairs of both rows (disjoint element sets), ascending.
+    pub(crate) fn merged(&self, other: &PartialRow) -> PartialRow {
+        let mut out = PartialRow::default();
+        let (mut i, mut j) = (0, 0);
+        while i < self.elements.len() || j < other.elements.len() {
+            let take_self = j == other.elements.len()
+                || (i < self.elements.len() && self.elements[i] < other.elements[j]);
+            let (row, at) = if take_self {
+                (self, &mut i)
+            } else {
+                (other, &mut j)
+            };
+            let (start, len) = row.ranges[*at];
+            out.push(
+                row.elements[*at] as usize,
+                &row.candidates[start as usize..(start + len) as usize],
+            );
+            *at += 1;
+        }
+        out
+    }
+
+    fn push(&mut self, k: usize, cands: &[u32]) {
+        debug_assert!(self.elements.last().is_none_or(|&l| (l as usize) < k));
+        self.elements.push(k as u32);
+        self.ranges
+            .push((self.candidates.len() as u32, cands.len() as u32));
+        self.candidates.extend_from_slice(cands);
+    }
+
     pub(crate) fn candidates_of(&self, k: usize) -> &[u32] {
         let i = self
             .elements
@@ -191,11 +234,7 @@ impl Walk<'_> {
 
     fn mark(&self, k: usize, cands: &[u32], partial: &mut PartialRow) {
         if straddles(self.a, self.flat_geom[k].0, self.occ.scale()) || !cands.is_empty() {
-            partial.elements.push(k as u32);
-            partial
-                .ranges
-                .push((partial.candidates.len() as u32, cands.len() as u32));
-            partial.candidates.extend_from_slice(cands);
+            partial.push(k, cands);
         }
     }
 

@@ -103,15 +103,27 @@ impl AssemblyPlan {
             .max()
             .unwrap_or(0);
         let mut g = vec![0.0f64; RUN_CHUNK * max_nq];
+        // Columns whose entries are the previous matrix's (FillMode::NotReused).
+        let unchanged = self.unchanged.as_deref().filter(|u| u.old(kp).is_some());
+        let skip =
+            |k: usize| mode == FillMode::NotReused && unchanged.is_some_and(|u| u.old(k).is_some());
+        let mode = match mode {
+            FillMode::NotReused => FillMode::All,
+            m => m,
+        };
         let mut evals = 0u64;
         let mut k = 0;
         while k < n {
+            if skip(k) {
+                k += 1;
+                continue;
+            }
             // A run of consecutive elements with one class: refinement numbers
             // children consecutively, so neighbours in space share a rule and
             // their rule points are contiguous in the far table.
             let class = classes[k];
             let mut end = k + 1;
-            while end < n && end - k < RUN_CHUNK && classes[end] == class {
+            while end < n && end - k < RUN_CHUNK && classes[end] == class && !skip(end) {
                 end += 1;
             }
             evals += fill.run(PairClass::from_code(class), k..end, block, mode, &mut g);

@@ -15,10 +15,12 @@
 mod classify;
 mod execute;
 mod kernels;
+mod reuse;
 mod tables;
 
 pub use classify::PairClass;
 pub use kernels::far_kernel_row;
+pub use reuse::Unchanged;
 pub use tables::FarTable;
 
 use super::integrate::{ElementIntegrator, QuadratureOptions, SelfRules};
@@ -58,6 +60,10 @@ pub enum FillMode {
     SpecialOnly,
     /// Only far pairs (for throughput measurements of the far-field kernel).
     FarOnly,
+    /// Every entry except those of pairs of two unchanged elements, in a
+    /// plan built by [`AssemblyPlan::updating`] (whose entries are the old
+    /// matrix's: [`Unchanged::copy_blocks`]); `All` in other plans.
+    NotReused,
 }
 
 /// The assembly plan of one discretization.
@@ -74,6 +80,7 @@ pub struct AssemblyPlan {
     occluders: Option<Occluders>,
     partial: Vec<PartialRow>,
     progress: Option<ProgressHandle>,
+    unchanged: Option<Arc<Unchanged>>,
 }
 
 impl AssemblyPlan {
@@ -98,13 +105,52 @@ impl AssemblyPlan {
         visibility: &VisibilityAnalysis,
         progress: Option<ProgressHandle>,
     ) -> Self {
+        Self::build(disc, opts, visibility, progress, None)
+    }
+
+    /// [`AssemblyPlan::with_progress`] for a mesh refined from `previous`'s
+    /// (`unchanged` relates their elements): the pairs of two unchanged
+    /// elements take `previous`'s classes and candidates instead of being
+    /// classified and walked again. When the node sets or the quadrature
+    /// options differ, nothing is reused.
+    pub fn updating(
+        disc: Arc<Discretization>,
+        opts: QuadratureOptions,
+        visibility: &VisibilityAnalysis,
+        progress: Option<ProgressHandle>,
+        previous: &AssemblyPlan,
+        unchanged: Arc<Unchanged>,
+    ) -> Self {
+        let same = previous.opts == opts
+            && previous.disc.nodes().degree() == disc.nodes().degree()
+            && previous.disc.nodes().alpha() == disc.nodes().alpha()
+            && previous.visibility.needed == visibility.needed
+            && unchanged.len() == disc.mesh().len()
+            && unchanged.old_len() == previous.disc.mesh().len();
+        let prev = same.then_some((previous, unchanged));
+        Self::build(disc, opts, visibility, progress, prev)
+    }
+
+    fn build(
+        disc: Arc<Discretization>,
+        opts: QuadratureOptions,
+        visibility: &VisibilityAnalysis,
+        progress: Option<ProgressHandle>,
+        prev: Option<(&AssemblyPlan, Arc<Unchanged>)>,
+    ) -> Self {
         if let Some(p) = &progress {
             p.start("plan", disc.mesh().len() as u64);
         }
         let occluders = visibility
             .needed
             .then(|| Occluders::new(&visibility::base_triangles(disc.mesh().surface())));
-        let (classes, partial) = classify_all(&disc, opts.tol, occluders.as_ref(), &progress);
+        let (classes, partial) = classify_all(
+            &disc,
+            opts.tol,
+            occluders.as_ref(),
+            &progress,
+            prev.as_ref().map(|(p, u)| (*p, &**u)),
+        );
         let ladder = RuleLadder::new();
         let (stats, used) = count(&classes, disc.nodes_per_element(), &ladder);
         let tables = (0..=MAX_RULE_DEGREE)
@@ -122,7 +168,14 @@ impl AssemblyPlan {
             occluders,
             partial,
             progress,
+            unchanged: prev.map(|(_, u)| u),
         }
+    }
+
+    /// The relation to the previous plan's elements, for a plan built by
+    /// [`AssemblyPlan::updating`] that reused it.
+    pub fn unchanged(&self) -> Option<&Unchanged> {
+        self.unchanged.as_deref()
     }
 
     /// Whether this plan models visibility, and why.
@@ -188,12 +241,14 @@ impl AssemblyPlan {
 }
 
 /// The class codes of every row block, and (with occluders) each block's
-/// partly visible pairs with their candidate occluders.
+/// partly visible pairs with their candidate occluders; with `prev`, the
+/// pairs of two unchanged elements are taken from the previous plan.
 fn classify_all(
     disc: &Discretization,
     tol: f64,
     occluders: Option<&Occluders>,
     progress: &Option<ProgressHandle>,
+    prev: Option<(&AssemblyPlan, &Unchanged)>,
 ) -> (Vec<u8>, Vec<PartialRow>) {
     let mesh = disc.mesh();
     let n = mesh.len();
@@ -209,20 +264,41 @@ fn classify_all(
         .into_par_iter()
         .map(|kp| {
             let block = &pts[kp * f..(kp + 1) * f];
-            let mut row: Vec<u8> = (0..n)
-                .map(|k| shapes.classify(kp, block, k, tol, r).code())
-                .collect();
+            // The previous plan's row of this element, when it is unchanged.
+            let old = prev.and_then(|(p, u)| u.old(kp).map(|op| (p, u, op)));
+            let reused = |k: usize| old.is_some_and(|(_, u, _)| u.old(k).is_some());
+            let mut row: Vec<u8> = match old {
+                Some((p, u, op)) => {
+                    let n_old = u.old_len();
+                    let old_row = &p.classes[op * n_old..(op + 1) * n_old];
+                    (0..n)
+                        .map(|k| match u.old(k) {
+                            Some(ok) => old_row[ok],
+                            None => shapes.classify(kp, block, k, tol, r).code(),
+                        })
+                        .collect()
+                }
+                None => (0..n)
+                    .map(|k| shapes.classify(kp, block, k, tol, r).code())
+                    .collect(),
+            };
             let mut partial = PartialRow::default();
             if let (Some(occ), true) = (occluders, shapes.is_flat(kp)) {
                 let live: Vec<bool> = (0..n)
                     .map(|k| {
                         let c = PairClass::from_code(row[k]);
-                        c != PairClass::Culled && c != PairClass::OnElement && shapes.is_flat(k)
+                        !reused(k)
+                            && c != PairClass::Culled
+                            && c != PairClass::OnElement
+                            && shapes.is_flat(k)
                     })
                     .collect();
                 partial = partial_pairs(occ, &tree, shapes.planes[kp], &shapes.planes, &live);
                 for &k in &partial.elements {
                     row[k as usize] = PairClass::Partial.code();
+                }
+                if let Some((p, u, op)) = old {
+                    partial = partial.merged(&p.partial[op].remapped(|ok| u.new_index(ok)));
                 }
             }
             if let Some(p) = progress {
