@@ -144,6 +144,13 @@ pub struct ProblemArgs {
     #[arg(long)]
     pub no_estimate: bool,
 
+    /// Show u_n as computed in images and vertex meshes, negative values included. By
+    /// default, where u_n < 0 although E, rho >= 0 (ringing at contact lines and shadow
+    /// edges), each such element is scaled towards its mean until it is nonnegative (Zhang
+    /// and Shu's limiter: integrals kept, the change reported and added to the estimate).
+    #[arg(long)]
+    pub keep_negative: bool,
+
     /// Print one JSON object instead of the text report.
     #[arg(long)]
     pub json: bool,

@@ -24,7 +24,7 @@ pub fn write_all(
     bar: Option<&Bar>,
 ) -> Result<Vec<Written>> {
     let mesh = out.discretization.mesh();
-    let solutions: Vec<&Solution> = out.channels.iter().map(|c| &c.solution).collect();
+    let solutions: Vec<&Solution> = out.channels.iter().map(|c| c.shown()).collect();
     let names: Vec<&str> = out.channels.iter().map(|c| c.name.as_str()).collect();
     let mut image: Option<Image> = None;
     let mut vertices: Option<VertexMesh> = None;

@@ -164,6 +164,7 @@ pub fn setup(p: &ProblemSpec, level: Option<u32>, max_edge: Option<f64>) -> Resu
         check_memory: true,
         max_edge,
         estimate: p.estimate,
+        limit_negative: p.limit_negative,
         progress: None,
     };
     Ok(Setup {

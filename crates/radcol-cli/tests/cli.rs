@@ -893,3 +893,67 @@ fn scenes_get_a_default_refinement() {
     let v = stdout_json(&radcol(&["info", "plates", "--json"]));
     assert_eq!(v["elements"], 4 * 256);
 }
+
+/// At the default settings the Cornell box's u_n rings below zero at the feet
+/// of the blocks (counted in the estimate); what is shown has no negative
+/// value: the limiter's report names the elements it scaled, and neither the
+/// EXR's pixels nor the PLY's vertices are negative. With
+/// `--keep-negative` the PLY shows u_n as computed, negative values included.
+#[test]
+fn cornell_shows_no_negative_light_at_the_default_settings() {
+    let dir = scratch("cornell_positive");
+    let exr = dir.join("c.exr").to_str().unwrap().to_string();
+    let ply = dir.join("c.ply").to_str().unwrap().to_string();
+    let raw = dir.join("raw.ply").to_str().unwrap().to_string();
+    let look = ["--width", "120", "--height", "90", "--samples", "1"];
+    let mut args = vec!["solve", "cornell", "--backend", "cpu", "--json"];
+    args.extend(look);
+    args.extend(["--out", &exr, "--out", &ply]);
+    let v = stdout_json(&radcol(&args));
+    let mut limited = 0;
+    for ch in v["channels"].as_array().unwrap() {
+        let est = &ch["estimate"];
+        let negative = est["negative_points"].as_u64().unwrap();
+        if negative > 0 {
+            assert!(est["min_value"].as_f64().unwrap() < 0.0);
+            let l = &ch["limited"];
+            assert!(l["elements"].as_u64().unwrap() > 0, "{ch}");
+            // Changes stay at the size of the negative values (r = 1: |min u_n|,
+            // up to the limiter's back-off of θ by 1e-9 or 1e-6 against rounding).
+            let change = l["max_change"].as_f64().unwrap();
+            assert!(
+                change <= -est["min_value"].as_f64().unwrap() * (1.0 + 1e-6),
+                "{ch}"
+            );
+            limited += 1;
+        }
+    }
+    assert!(
+        limited > 0,
+        "the default Cornell solve no longer rings: this test checks nothing"
+    );
+    let image = exr::prelude::read_first_flat_layer_from_file(&exr).unwrap();
+    let mut pixels = 0;
+    for c in &image.layer_data.channel_data.list {
+        for x in c.sample_data.values_as_f32() {
+            assert!(x >= 0.0 && x.is_finite(), "EXR value {x}");
+            pixels += 1;
+        }
+    }
+    assert_eq!(pixels, 3 * 120 * 90);
+    let vertices = read_ply(&ply);
+    assert!(vertices.iter().all(|(_, _, u)| u.iter().all(|&x| x >= 0.0)));
+
+    let mut args = vec![
+        "solve",
+        "cornell",
+        "--backend",
+        "cpu",
+        "--keep-negative",
+        "--no-estimate",
+    ];
+    args.extend(["--out", &raw]);
+    assert!(radcol(&args).status.success());
+    let vertices = read_ply(&raw);
+    assert!(vertices.iter().any(|(_, _, u)| u.iter().any(|&x| x < 0.0)));
+}

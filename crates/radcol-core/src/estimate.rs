@@ -15,12 +15,15 @@
 //! small α_c ([`check_nodes`]). Through them η is interpolated on each
 //! element, which holds the leading (degree r + 1) term of u - u_n, and that
 //! interpolant is sampled everywhere on the element, vertices and edges
-//! included, where u - u_n is largest. u_n, a polynomial of degree r on
-//! each element, is written exactly in their Lagrange basis, so K u_n at the
-//! check points is one row block of an ordinary [`AssemblyPlan`] over those
-//! points, with the plan's visibility (partly visible pairs clipped exactly)
-//! and quadrature: η is the collocation residual on the check points. The
-//! blocks are filled and contracted one at a time (memory O(f·N), not N²).
+//! included, where u - u_n is largest. K u_n at the check points is one row
+//! block of an [`AssemblyPlan::at_points`] plan per element, rows at the
+//! check points and columns u_n's own basis, with the solve's visibility
+//! (partly visible pairs clipped exactly) and quadrature: η is the
+//! collocation residual on the check points. The blocks are filled and
+//! contracted one at a time (memory O(f·N), not N²). (A first version wrote
+//! u_n in the degree-(r + 1) basis of the check points, square but with
+//! (r + 3)/(r + 1) times the columns: the estimate cost twice the assembly
+//! at r = 1.)
 //!
 //! **Negative light.** With E ≥ 0 and ρ ≥ 0 the exact u is ≥ 0, so a
 //! negative u_n at a node or check point is an error at least |u_n| there:
@@ -107,7 +110,7 @@ impl ErrorEstimate {
 }
 
 /// What the estimate of one channel needs: u_n, and ρ and E at the check
-/// points (ordered like `check.discretization().points()`).
+/// points (ordered like `check.rows().points()`).
 #[derive(Debug)]
 pub struct ChannelFields<'a> {
     /// The solution.
@@ -120,13 +123,14 @@ pub struct ChannelFields<'a> {
     pub emission_nodes: &'a [f64],
 }
 
-/// The estimate of every channel, with `check` the plan over the check
-/// points ([`check_nodes`] on the solutions' mesh).
+/// The estimate of every channel, with `check` the plan from u_n's basis
+/// to the check points ([`AssemblyPlan::at_points`] with the
+/// [`check_nodes`] on the solutions' mesh).
 pub fn estimate(check: &AssemblyPlan, channels: &[ChannelFields<'_>]) -> Vec<ErrorEstimate> {
-    let disc = check.discretization();
+    let disc = check.rows();
     let n = disc.mesh().len();
     let fc = disc.nodes_per_element();
-    let nc = disc.len();
+    let ncols = check.dim();
     // u_n at the check points: its coefficients in the check basis.
     let coeffs: Vec<Vec<f64>> = channels
         .iter()
@@ -137,19 +141,21 @@ pub fn estimate(check: &AssemblyPlan, channels: &[ChannelFields<'_>]) -> Vec<Err
                 .collect()
         })
         .collect();
-    // η at every check point, channel-major within each element's block.
+    // η at every check point, channel-major within each element's block:
+    // the rows are the check points, the columns u_n's own basis.
     let eta: Vec<Vec<f64>> = (0..n)
         .into_par_iter()
         .map_init(
-            || vec![0.0; fc * nc],
+            || vec![0.0; fc * ncols],
             |block, kp| {
                 check.fill_block(kp, block, FillMode::All);
                 let mut out = Vec::with_capacity(channels.len() * fc);
                 for (ch, c) in channels.iter().zip(&coeffs) {
+                    let u = ch.solution.nodal();
                     for a in 0..fc {
                         let i = kp * fc + a;
-                        let row = &block[a * nc..(a + 1) * nc];
-                        let ku: f64 = row.iter().zip(c).map(|(g, u)| g * u).sum();
+                        let row = &block[a * ncols..(a + 1) * ncols];
+                        let ku: f64 = row.iter().zip(u).map(|(g, u)| g * u).sum();
                         out.push(ch.emission[i] + ch.rho[i] * ku - c[i]);
                     }
                 }

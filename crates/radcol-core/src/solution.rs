@@ -1,12 +1,35 @@
 //! The collocation solution u_n (eq. 18): nodal values, evaluation anywhere on
-//! S, the iterated solution û_n = E + K u_n (eq. 21) and ∫_S u_n.
+//! S, the iterated solution û_n = E + K u_n (eq. 21), ∫_S u_n, and its
+//! nonnegative version for display ([`Solution::limited_nonnegative`]).
 
 use crate::assembly::{ElementIntegrator, FieldPoint};
 use crate::discretization::Discretization;
 use crate::nodes::MAX_DEGREE;
 use crate::quadrature::RuleLadder;
 use glam::DVec3;
+use rayon::prelude::*;
+use serde::Serialize;
 use std::sync::Arc;
+
+/// Samples per element edge of the limiter's check for negative values:
+/// twice the norms' lattice ([`crate::norms::LATTICE`]), so that every point
+/// the report counts, and the points between them, are checked.
+pub const LIMITER_LATTICE: usize = 2 * crate::norms::LATTICE;
+
+/// What [`Solution::limited_nonnegative`] changed.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Limited {
+    /// Elements scaled towards their mean.
+    pub elements: usize,
+    /// Of those, elements whose mean was itself negative (set to 0: their
+    /// integral is not kept).
+    pub zeroed: usize,
+    /// max |ũ_n − u_n| over S (absolute; on the limiter's lattice).
+    pub max_change: f64,
+    /// Per element, max |ũ_n − u_n| (0 where unchanged); length n.
+    #[serde(skip)]
+    pub change: Vec<f64>,
+}
 
 /// Nodal values of u_n on a discretization.
 #[derive(Clone, Debug)]
@@ -42,6 +65,102 @@ impl Solution {
             .zip(&self.values[k * f..(k + 1) * f])
             .map(|(a, b)| a * b)
             .sum()
+    }
+
+    /// u_n made nonnegative element by element, for problems whose exact u is
+    /// (E, ρ ≥ 0), with Zhang and Shu's scaling limiter (J. Comput. Phys. 229,
+    /// 2010): on an element where u_n < 0 somewhere on the limiter's lattice,
+    /// ũ_n = ū + θ (u_n − ū), ū the element's mean of u_n and θ ∈ [0, 1) the
+    /// largest that keeps ũ_n ≥ 0 there. The element integral is kept, and
+    /// where the exact u ≥ 0 the change, |m| max(M − ū, ū − m)/(ū − m) (M, m: max
+    /// and min of u_n on the element), is at most the element's error
+    /// (|m| ≤ max |u − u_n|) times max(M − ū, ū − m)/(ū − m) (1 at r = 1 when
+    /// the minimum is the farthest value from the mean). None when u_n has no
+    /// negative value there.
+    pub fn limited_nonnegative(&self) -> Option<(Solution, Limited)> {
+        let disc = &self.disc;
+        let mesh = disc.mesh();
+        let f = disc.nodes_per_element();
+        let r = disc.nodes().degree();
+        let m = LIMITER_LATTICE;
+        let lattice: Vec<[f64; 2]> = (0..=m)
+            .flat_map(|a| (0..=m - a).map(move |b| [a as f64 / m as f64, b as f64 / m as f64]))
+            .collect();
+        let ladder = RuleLadder::new();
+        let l = [0.0; (MAX_DEGREE + 1) * (MAX_DEGREE + 2) / 2];
+        let eval = |c: &[f64], st: &[f64; 2], l: &mut [f64]| -> f64 {
+            disc.nodes().eval_basis(st[0], st[1], &mut l[..f]);
+            l[..f].iter().zip(c).map(|(a, b)| a * b).sum()
+        };
+        // Per element that must be limited: its new coefficients, ū and the change.
+        let limits: Vec<Option<(Vec<f64>, f64, f64)>> = (0..mesh.len())
+            .into_par_iter()
+            .map_init(
+                || l,
+                |l, k| {
+                    let c = &self.values[k * f..(k + 1) * f];
+                    let (lo, hi) = lattice
+                        .iter()
+                        .map(|st| eval(c, st, l))
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), u| {
+                            (a.min(u), b.max(u))
+                        });
+                    if lo >= 0.0 {
+                        return None;
+                    }
+                    let rule = ladder.rule(if mesh.is_flat(k) { r } else { r + 6 });
+                    let (mut num, mut den) = (0.0, 0.0);
+                    for (&[s, t], &w) in rule.points.iter().zip(&rule.weights) {
+                        let j = w * mesh.point(k, s, t).jacobian;
+                        num += j * self.eval(k, s, t);
+                        den += j;
+                    }
+                    let mean = (num / den).max(0.0);
+                    // The largest θ whose coefficients evaluate nonnegative on
+                    // the lattice in floating point (the exact θ can leave
+                    // -1e-17 by rounding); θ = 0 is the constant ū ≥ 0.
+                    let exact = mean / (mean - lo);
+                    let scaled = |theta: f64| -> Vec<f64> {
+                        c.iter().map(|&v| mean + theta * (v - mean)).collect()
+                    };
+                    let mut new = scaled(0.0);
+                    let mut theta = 0.0;
+                    for t in [
+                        exact,
+                        exact * (1.0 - 1e-9),
+                        exact * (1.0 - 1e-6),
+                        exact * 0.999,
+                    ] {
+                        let cand = scaled(t);
+                        if lattice.iter().all(|st| eval(&cand, st, l) >= 0.0) {
+                            (new, theta) = (cand, t);
+                            break;
+                        }
+                    }
+                    let change = (1.0 - theta) * (hi - mean).max(mean - lo);
+                    Some((new, mean, change))
+                },
+            )
+            .collect();
+        if limits.iter().all(Option::is_none) {
+            return None;
+        }
+        let mut values = self.values.clone();
+        let mut report = Limited {
+            change: vec![0.0; mesh.len()],
+            ..Limited::default()
+        };
+        for (k, lim) in limits.into_iter().enumerate() {
+            let Some((new, mean, change)) = lim else {
+                continue;
+            };
+            values[k * f..(k + 1) * f].copy_from_slice(&new);
+            report.elements += 1;
+            report.zeroed += usize::from(mean == 0.0);
+            report.change[k] = change;
+            report.max_change = report.max_change.max(change);
+        }
+        Some((Solution::new(disc.clone(), values), report))
     }
 
     /// u_n at a point of S (None when the point is not on the mesh).
@@ -104,4 +223,56 @@ pub fn integrate_nodal(disc: &Discretization, values: &[f64]) -> f64 {
         }
     }
     total
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::shapes::{box_room, sphere};
+    use crate::mesh::Mesh;
+    use crate::nodes::NodeSet;
+
+    fn lattice_min(s: &Solution, k: usize) -> f64 {
+        let m = LIMITER_LATTICE;
+        (0..=m)
+            .flat_map(|a| (0..=m - a).map(move |b| (a, b)))
+            .map(|(a, b)| s.eval(k, a as f64 / m as f64, b as f64 / m as f64))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The limiter changes only the elements with negative values, keeps their
+    /// integrals, leaves them nonnegative with a minimum at 0 (the largest θ),
+    /// and does nothing to a nonnegative u_n; flat (box) and curved (sphere)
+    /// elements, r = 1 and 3.
+    #[test]
+    fn limiter_keeps_integrals_and_removes_negative_values() {
+        for (surface, r) in [(box_room(1.0, 2.0, 1.5), 1), (sphere(1.0), 3)] {
+            let mesh = Arc::new(Mesh::new(Arc::new(surface), 1));
+            let disc = Arc::new(Discretization::new(mesh, NodeSet::new(r, 0.1).unwrap()));
+            let f = disc.nodes_per_element();
+            let positive = Solution::new(disc.clone(), vec![1.0; disc.len()]);
+            assert!(positive.limited_nonnegative().is_none());
+            let mut values = vec![1.0; disc.len()];
+            values[0] = -0.5;
+            values[3 * f + 1] = -2.0;
+            let u = Solution::new(disc.clone(), values);
+            let (v, report) = u.limited_nonnegative().expect("u_n < 0 on two elements");
+            assert_eq!(report.elements, 2);
+            crate::assert_close!(v.integral(), u.integral(), 1e-13 * u.integral());
+            for k in 0..disc.mesh().len() {
+                let min = lattice_min(&v, k);
+                assert!(min >= 0.0, "r={r} element {k}: {min}");
+                if k == 0 || k == 3 {
+                    assert!(min < 1e-5, "r={r} element {k}: θ not the largest ({min})");
+                    assert!(report.change[k] > 0.0);
+                } else {
+                    assert_eq!(
+                        &v.nodal()[k * f..(k + 1) * f],
+                        &u.nodal()[k * f..(k + 1) * f]
+                    );
+                    assert_eq!(report.change[k], 0.0);
+                }
+            }
+        }
+    }
 }

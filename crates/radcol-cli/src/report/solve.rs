@@ -7,6 +7,7 @@ use radcol_core::assembly::{BackendInfo, VisibilityMode};
 use radcol_core::estimate::ErrorEstimate;
 use radcol_core::norms::ErrorNorms;
 use radcol_core::run::{SolveOutcome, SolverKind, SolverReport, Timings};
+use radcol_core::solution::Limited;
 use radcol_core::visibility::VisibilityAnalysis;
 use serde::Serialize;
 use std::fmt;
@@ -74,6 +75,9 @@ pub struct ChannelReport {
     estimate: Option<ErrorEstimate>,
     /// Estimated over true global max error, when both are known.
     effectivity: Option<f64>,
+    /// What the positivity limiter changed for display, when u_n < 0
+    /// somewhere although E, ρ ≥ 0.
+    limited: Option<Limited>,
 }
 
 /// What a scene with materials holds, for the text report.
@@ -188,6 +192,7 @@ impl SolveReport {
                         (Some(e), Some(est)) if e.global_max > 0.0 => Some(est.max / e.global_max),
                         _ => None,
                     },
+                    limited: c.limited.as_ref().map(|(_, l)| l.clone()),
                 })
                 .collect(),
             out: written.to_vec(),
@@ -270,6 +275,29 @@ impl SolveReport {
             }
             if let Some(e) = &ch.estimate {
                 fmt_estimate(f, e, ch.effectivity)?;
+            }
+            if let Some(l) = &ch.limited {
+                let scale = ch.estimate.as_ref().map(|e| e.scale);
+                let shown = ch
+                    .estimate
+                    .as_ref()
+                    .map(|e| e.elements_rel().fold(0.0f64, f64::max))
+                    .map(|m| format!("; estimated error of what is shown: max {}", sci(m)))
+                    .unwrap_or_default();
+                writeln!(
+                    f,
+                    "              limited: {} element{} scaled towards {} mean{} to show no u < 0 ({} set to 0); largest change {}{}{shown} (--keep-negative shows u_n as computed)",
+                    l.elements,
+                    if l.elements == 1 { "" } else { "s" },
+                    if l.elements == 1 { "its" } else { "their" },
+                    if l.elements == 1 { "" } else { "s" },
+                    l.zeroed,
+                    sci(l.max_change),
+                    scale
+                        .filter(|&s| s > 0.0)
+                        .map(|s| format!(" = {} of max|u|", sci(l.max_change / s)))
+                        .unwrap_or_default()
+                )?;
             }
         }
         Ok(())

@@ -72,6 +72,8 @@ pub struct ProblemSpec {
     pub precision: Precision,
     /// Estimate the error after the solve.
     pub estimate: bool,
+    /// Limit negative u_n for display.
+    pub limit_negative: bool,
     /// JSON instead of text.
     pub json: bool,
 }
@@ -333,6 +335,7 @@ fn problem(p: &ProblemArgs) -> Result<ProblemSpec> {
         backend,
         precision,
         estimate: !p.no_estimate,
+        limit_negative: !p.keep_negative,
         json: p.json,
     })
 }

@@ -38,6 +38,10 @@ impl AssemblyBackend for CpuBackend {
 fn fill(plan: &AssemblyPlan, previous: Option<&DenseMatrix>) -> Assembled {
     let start = Instant::now();
     let n_dim = plan.dim();
+    assert!(
+        std::sync::Arc::ptr_eq(plan.rows(), plan.discretization()),
+        "backends assemble square plans (AssemblyPlan::at_points plans are filled block by block)"
+    );
     let f = plan.discretization().nodes_per_element();
     let mut matrix = DenseMatrix::zeros(n_dim, n_dim);
     let mode = match (previous, plan.unchanged()) {

@@ -38,6 +38,10 @@ pub struct SolveConfig {
     /// Estimate the error of every channel after the solve
     /// ([`crate::estimate`]): about as much work again as the assembly.
     pub estimate: bool,
+    /// Where u_n < 0 although E, ρ ≥ 0, also give the nonnegative ũ_n of
+    /// [`crate::solution::Solution::limited_nonnegative`] for display
+    /// ([`super::ChannelResult::shown`]).
+    pub limit_negative: bool,
     /// Progress observer (assembly row blocks, channels solved), if any.
     pub progress: Option<ProgressHandle>,
 }
@@ -54,6 +58,7 @@ impl Default for SolveConfig {
             check_memory: true,
             max_edge: None,
             estimate: true,
+            limit_negative: true,
             progress: None,
         }
     }

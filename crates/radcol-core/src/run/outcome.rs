@@ -7,7 +7,7 @@ use crate::discretization::Discretization;
 use crate::estimate::ErrorEstimate;
 use crate::matrix::DenseMatrix;
 use crate::norms::ErrorNorms;
-use crate::solution::Solution;
+use crate::solution::{Limited, Solution};
 use crate::visibility::VisibilityAnalysis;
 use serde::Serialize;
 use std::sync::Arc;
@@ -63,6 +63,18 @@ pub struct ChannelResult {
     pub errors: Option<ErrorNorms>,
     /// The a posteriori error estimate, when asked for.
     pub estimate: Option<ErrorEstimate>,
+    /// u_n made nonnegative and what that changed, when u_n has negative
+    /// values although E, ρ ≥ 0 (and [`super::SolveConfig::limit_negative`]).
+    /// Its changes are added to the element estimates.
+    pub limited: Option<(Solution, Limited)>,
+}
+
+impl ChannelResult {
+    /// The solution to show (images, vertex meshes): the limited one when
+    /// there is one, else u_n.
+    pub fn shown(&self) -> &Solution {
+        self.limited.as_ref().map_or(&self.solution, |(s, _)| s)
+    }
 }
 
 /// Everything a solve produced.

@@ -155,6 +155,7 @@ fn solve_channels(
             },
             errors: None,
             estimate: None,
+            limited: None,
         });
         if let Some(p) = &cfg.progress {
             p.advance(1);
@@ -231,12 +232,8 @@ fn estimate_channels(
         tol: cfg.quad.tol.max(ESTIMATE_QUAD_TOL),
         ..cfg.quad.clone()
     };
-    let plan = match previous.and_then(|p| p.plans.check.as_ref().map(|c| (c, p))) {
-        Some((old, p)) => {
-            AssemblyPlan::updating(check, quad, visibility, None, old, p.unchanged.clone())
-        }
-        None => AssemblyPlan::with_progress(check, quad, visibility, None),
-    };
+    let reuse = previous.and_then(|p| p.plans.check.as_ref().map(|c| (c, p.unchanged.clone())));
+    let plan = AssemblyPlan::at_points(disc.clone(), check, quad, visibility, reuse);
     let inputs: Vec<ChannelFields<'_>> = channels
         .iter()
         .zip(&check_fields)
@@ -362,6 +359,9 @@ impl Stages<'_> {
             None
         };
         let estimate_s = t.elapsed().as_secs_f64();
+        if cfg.limit_negative {
+            channels.iter_mut().for_each(limit_negative);
+        }
 
         let outcome = SolveOutcome {
             h,
@@ -384,6 +384,20 @@ impl Stages<'_> {
             },
         };
         Ok((outcome, Plans { solve: plan, check }))
+    }
+}
+
+/// Limits `ch`'s u_n to nonnegative values when E ≥ 0 (ρ ≥ 0 always) and
+/// u_n has negative ones; the element estimates grow by the change.
+fn limit_negative(ch: &mut ChannelResult) {
+    if ch.emission.iter().any(|&e| e < 0.0) {
+        return;
+    }
+    ch.limited = ch.solution.limited_nonnegative();
+    if let (Some((_, lim)), Some(e)) = (&ch.limited, &mut ch.estimate) {
+        for (x, c) in e.elements.iter_mut().zip(&lim.change) {
+            *x += c;
+        }
     }
 }
 

@@ -16,6 +16,7 @@ struct BlockFill<'a, 'i> {
     pts: &'a [CollocationPoint],
     integrator: &'a ElementIntegrator<'i>,
     phi: &'a Integrand<'a>,
+    /// Basis functions per element (columns per element).
     f: usize,
     ncols: usize,
 }
@@ -73,13 +74,16 @@ impl AssemblyPlan {
         evals
     }
 
-    /// Fills the row block of element `kp`: `block` holds its f_r rows of the
-    /// geometric matrix (length f_r · N, row-major). Returns kernel evaluations.
+    /// Fills the row block of element `kp`: `block` holds its rows of the
+    /// geometric matrix (f_r rows, or the row points per element of an
+    /// [`AssemblyPlan::at_points`] plan; length rows · N, row-major). Returns
+    /// kernel evaluations.
     pub fn fill_block(&self, kp: usize, block: &mut [f64], mode: FillMode) -> u64 {
         let n = self.disc.mesh().len();
         let f = self.disc.nodes_per_element();
+        let f_rows = self.rows().nodes_per_element();
         let ncols = n * f;
-        debug_assert_eq!(block.len(), f * ncols);
+        debug_assert_eq!(block.len(), f_rows * ncols);
         let classes = &self.classes[kp * n..(kp + 1) * n];
         let integrator = self.integrator();
         let nodes = self.disc.nodes();
@@ -89,7 +93,7 @@ impl AssemblyPlan {
         let fill = BlockFill {
             plan: self,
             kp,
-            pts: &self.disc.points()[kp * f..(kp + 1) * f],
+            pts: &self.rows().points()[kp * f_rows..(kp + 1) * f_rows],
             integrator: &integrator,
             phi: &phi,
             f,
@@ -153,7 +157,7 @@ impl BlockFill<'_, '_> {
         let (f, ncols) = (self.f, self.ncols);
         match class {
             PairClass::Culled if mode == FillMode::All => {
-                for row in 0..f {
+                for row in 0..self.pts.len() {
                     block[row * ncols + run.start * f..row * ncols + run.end * f].fill(0.0);
                 }
                 0
@@ -248,6 +252,6 @@ impl BlockFill<'_, '_> {
             let out = &mut block[row * ncols + run.start * f..row * ncols + run.end * f];
             contract(g, &t.basis_t, nq, f, out);
         }
-        (f * len) as u64
+        (self.pts.len() * len) as u64
     }
 }

@@ -70,6 +70,9 @@ pub enum FillMode {
 #[derive(Debug)]
 pub struct AssemblyPlan {
     disc: Arc<Discretization>,
+    /// The points of the rows, when they are not `disc`'s collocation points
+    /// (same mesh): [`AssemblyPlan::at_points`].
+    rows: Option<Arc<Discretization>>,
     opts: QuadratureOptions,
     ladder: RuleLadder,
     self_rule: Arc<SelfRules>,
@@ -105,7 +108,52 @@ impl AssemblyPlan {
         visibility: &VisibilityAnalysis,
         progress: Option<ProgressHandle>,
     ) -> Self {
-        Self::build(disc, opts, visibility, progress, None)
+        Self::build(disc, None, opts, visibility, progress, None)
+    }
+
+    /// The plan of the rectangular matrix whose rows are the points of
+    /// `rows` and whose columns are the basis of `disc` (the same mesh): the
+    /// kernel at other points than the collocation nodes, such as the error
+    /// estimate's check points, against u_n's own basis. With `previous` (a
+    /// plan at the points of the mesh this one refines, and how their
+    /// elements relate) the pairs of unchanged elements are reused as in
+    /// [`AssemblyPlan::updating`]. Such a plan is executed with
+    /// [`AssemblyPlan::fill_block`] (row blocks of `rows`' points per
+    /// element); backends assemble square plans only.
+    pub fn at_points(
+        disc: Arc<Discretization>,
+        rows: Arc<Discretization>,
+        opts: QuadratureOptions,
+        visibility: &VisibilityAnalysis,
+        previous: Option<(&AssemblyPlan, Arc<Unchanged>)>,
+    ) -> Self {
+        assert!(
+            Arc::ptr_eq(disc.mesh(), rows.mesh()),
+            "rows and columns on one mesh"
+        );
+        let prev = previous.filter(|(p, u)| {
+            p.rows.as_ref().is_some_and(|r| {
+                r.nodes().degree() == rows.nodes().degree()
+                    && r.nodes().alpha() == rows.nodes().alpha()
+            }) && p.reusable_by(&disc, &opts, visibility, u)
+        });
+        Self::build(disc, Some(rows), opts, visibility, None, prev)
+    }
+
+    /// Whether a plan for `disc` may take this plan's pairs of `unchanged` elements.
+    fn reusable_by(
+        &self,
+        disc: &Discretization,
+        opts: &QuadratureOptions,
+        visibility: &VisibilityAnalysis,
+        unchanged: &Unchanged,
+    ) -> bool {
+        self.opts == *opts
+            && self.disc.nodes().degree() == disc.nodes().degree()
+            && self.disc.nodes().alpha() == disc.nodes().alpha()
+            && self.visibility.needed == visibility.needed
+            && unchanged.len() == disc.mesh().len()
+            && unchanged.old_len() == self.disc.mesh().len()
     }
 
     /// [`AssemblyPlan::with_progress`] for a mesh refined from `previous`'s
@@ -121,18 +169,15 @@ impl AssemblyPlan {
         previous: &AssemblyPlan,
         unchanged: Arc<Unchanged>,
     ) -> Self {
-        let same = previous.opts == opts
-            && previous.disc.nodes().degree() == disc.nodes().degree()
-            && previous.disc.nodes().alpha() == disc.nodes().alpha()
-            && previous.visibility.needed == visibility.needed
-            && unchanged.len() == disc.mesh().len()
-            && unchanged.old_len() == previous.disc.mesh().len();
+        let same =
+            previous.rows.is_none() && previous.reusable_by(&disc, &opts, visibility, &unchanged);
         let prev = same.then_some((previous, unchanged));
-        Self::build(disc, opts, visibility, progress, prev)
+        Self::build(disc, None, opts, visibility, progress, prev)
     }
 
     fn build(
         disc: Arc<Discretization>,
+        rows: Option<Arc<Discretization>>,
         opts: QuadratureOptions,
         visibility: &VisibilityAnalysis,
         progress: Option<ProgressHandle>,
@@ -146,19 +191,22 @@ impl AssemblyPlan {
             .then(|| Occluders::new(&visibility::base_triangles(disc.mesh().surface())));
         let (classes, partial) = classify_all(
             &disc,
+            rows.as_deref().unwrap_or(&disc),
             opts.tol,
             occluders.as_ref(),
             &progress,
             prev.as_ref().map(|(p, u)| (*p, &**u)),
         );
         let ladder = RuleLadder::new();
-        let (stats, used) = count(&classes, disc.nodes_per_element(), &ladder);
+        let f_rows = rows.as_ref().unwrap_or(&disc).nodes_per_element();
+        let (stats, used) = count(&classes, f_rows, &ladder);
         let tables = (0..=MAX_RULE_DEGREE)
             .map(|d| used[d].then(|| tables::build_table(&disc, &ladder, d)))
             .collect();
         Self {
             self_rule: Arc::new(SelfRules::new(opts.self_order)),
             disc,
+            rows,
             opts,
             ladder,
             classes,
@@ -224,9 +272,17 @@ impl AssemblyPlan {
         self.stats
     }
 
-    /// Matrix dimension N.
+    /// Matrix dimension N (columns; rows too unless the plan is
+    /// [`AssemblyPlan::at_points`]).
     pub fn dim(&self) -> usize {
         self.disc.len()
+    }
+
+    /// The discretization whose points are the rows: the collocation points
+    /// of [`AssemblyPlan::discretization`] unless the plan is
+    /// [`AssemblyPlan::at_points`].
+    pub fn rows(&self) -> &Arc<Discretization> {
+        self.rows.as_ref().unwrap_or(&self.disc)
     }
 
     /// An integrator with this plan's options over its mesh.
@@ -245,6 +301,7 @@ impl AssemblyPlan {
 /// pairs of two unchanged elements are taken from the previous plan.
 fn classify_all(
     disc: &Discretization,
+    rows: &Discretization,
     tol: f64,
     occluders: Option<&Occluders>,
     progress: &Option<ProgressHandle>,
@@ -252,10 +309,10 @@ fn classify_all(
 ) -> (Vec<u8>, Vec<PartialRow>) {
     let mesh = disc.mesh();
     let n = mesh.len();
-    let f = disc.nodes_per_element();
+    let f = rows.nodes_per_element();
     let r = disc.nodes().degree();
     let shapes = ElementShapes::new(mesh);
-    let pts = disc.points();
+    let pts = rows.points();
     let tree = match occluders {
         Some(_) => RefinementTree::new(mesh),
         None => RefinementTree::default(),
