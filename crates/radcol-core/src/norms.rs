@@ -12,6 +12,9 @@ use serde::Serialize;
 /// (a/M, b/M), a + b ≤ M, include vertices, edge points and interior points.
 pub const LATTICE: usize = 8;
 
+// The limiter's lattice holds this one: no point counted here is left negative.
+const _: () = assert!(crate::solution::LIMITER_LATTICE.is_multiple_of(LATTICE));
+
 /// Error norms of u - u_n.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct ErrorNorms {

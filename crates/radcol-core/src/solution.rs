@@ -11,10 +11,11 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::sync::Arc;
 
-/// Samples per element edge of the limiter's check for negative values:
-/// twice the norms' lattice ([`crate::norms::LATTICE`]), so that every point
-/// the report counts, and the points between them, are checked.
-pub const LIMITER_LATTICE: usize = 2 * crate::norms::LATTICE;
+/// Samples per element edge of the limiter's check for negative values: a
+/// multiple of the norms' lattice (`norms::LATTICE`, 8; checked there), so
+/// that every point the report counts, and the points between them, are
+/// checked.
+pub const LIMITER_LATTICE: usize = 16;
 
 /// What [`Solution::limited_nonnegative`] changed.
 #[derive(Clone, Debug, Default, Serialize)]

@@ -180,35 +180,12 @@ pub fn solve_adaptive(
             prev.as_ref(),
         )?;
         drop(prev);
-        // The old matrix goes before the estimate of the next step is read.
+        // The previous solve has served: its matrix goes before the next one.
         drop(previous.take());
-        let (indicator, negative) = indicators(&out);
-        let (estimate, estimate_rms) = worst(&out);
+        let (mut step, indicator) = describe(&out, &depth, opts, t.elapsed().as_secs_f64());
+        let estimate = step.estimate;
         let threshold = opts.mark_fraction * opts.target;
         let capped = |k: usize| depth[k] >= opts.max_depth;
-        let at_depth_limit = (0..indicator.len())
-            .filter(|&k| capped(k) && indicator[k] > threshold)
-            .count();
-        let negative_elements = negative.iter().filter(|&&b| b).count();
-        let estimate_elsewhere = (0..indicator.len())
-            .filter(|&k| !capped(k))
-            .map(|k| indicator[k])
-            .fold(0.0f64, f64::max);
-        let mut step = AdaptStep {
-            elements: mesh.len(),
-            unknowns: out.discretization.len(),
-            estimate,
-            estimate_rms,
-            true_error: out.channels.first().and_then(|c| {
-                let scale = c.estimate.as_ref().map_or(1.0, |x| x.scale);
-                c.errors.map(|e| e.global_max / scale)
-            }),
-            split: 0,
-            negative_elements,
-            at_depth_limit,
-            estimate_elsewhere,
-            seconds: t.elapsed().as_secs_f64(),
-        };
         let stop = if estimate <= opts.target {
             Some(StopReason::Reached)
         } else if steps.len() + 1 >= opts.max_steps {
@@ -252,6 +229,41 @@ pub fn solve_adaptive(
         previous = Some((out, plans, unchanged));
         mesh = Arc::new(refined);
     }
+}
+
+/// The step of `out` (solved in `seconds`, elements at `depth`), and its
+/// element indicators.
+fn describe(
+    out: &SolveOutcome,
+    depth: &[u32],
+    opts: &AdaptOptions,
+    seconds: f64,
+) -> (AdaptStep, Vec<f64>) {
+    let (indicator, negative) = indicators(out);
+    let (estimate, estimate_rms) = worst(out);
+    let threshold = opts.mark_fraction * opts.target;
+    let capped = |k: usize| depth[k] >= opts.max_depth;
+    let step = AdaptStep {
+        elements: indicator.len(),
+        unknowns: out.discretization.len(),
+        estimate,
+        estimate_rms,
+        true_error: out.channels.first().and_then(|c| {
+            let scale = c.estimate.as_ref().map_or(1.0, |x| x.scale);
+            c.errors.map(|e| e.global_max / scale)
+        }),
+        split: 0,
+        negative_elements: negative.iter().filter(|&&b| b).count(),
+        at_depth_limit: (0..indicator.len())
+            .filter(|&k| capped(k) && indicator[k] > threshold)
+            .count(),
+        estimate_elsewhere: (0..indicator.len())
+            .filter(|&k| !capped(k))
+            .map(|k| indicator[k])
+            .fold(0.0f64, f64::max),
+        seconds,
+    };
+    (step, indicator)
 }
 
 /// Per element, the worst channel's estimate relative to its max |u_n|, and
