@@ -21,9 +21,9 @@
 //! (partly visible pairs clipped exactly) and quadrature: η is the
 //! collocation residual on the check points. The blocks are filled and
 //! contracted one at a time (memory O(f·N), not N²). (A first version wrote
-//! u_n in the degree-(r + 1) basis of the check points, square but with
-//! (r + 3)/(r + 1) times the columns: the estimate cost twice the assembly
-//! at r = 1.)
+//! u_n in the degree-(r + 1) basis of the check points: a square plan with
+//! (r + 3)/(r + 1) times the columns, the same estimates in the same time,
+//! since the cost is the kernel evaluations per check point.)
 //!
 //! **Negative light.** With E ≥ 0 and ρ ≥ 0 the exact u is ≥ 0, so a
 //! negative u_n at a node or check point is an error at least |u_n| there:
@@ -95,8 +95,7 @@ pub struct ErrorEstimate {
     #[serde(skip)]
     pub elements: Vec<f64>,
     /// Per element: whether u_n < 0 somewhere on its lattice while negative
-    /// light is unphysical (the adaptive loop splits these whatever their
-    /// size); length n.
+    /// light is unphysical; length n.
     #[serde(skip)]
     pub negative: Vec<bool>,
 }

@@ -76,11 +76,6 @@ impl Unchanged {
         self.new_of.len()
     }
 
-    /// Unchanged elements.
-    pub fn count(&self) -> usize {
-        self.old_of.iter().filter(|&&o| o != NEW).count()
-    }
-
     /// Copies the entries of the pairs of unchanged elements from `previous`
     /// (the old mesh's N_old × N_old matrix with `f` unknowns per element)
     /// into `matrix` (the refined mesh's).
@@ -120,7 +115,7 @@ mod tests {
             (u.new_index(0), u.new_index(1), u.new_index(2)),
             (Some(0), None, Some(3))
         );
-        assert_eq!((u.len(), u.old_len(), u.count()), (4, 3, 2));
+        assert_eq!((u.len(), u.old_len()), (4, 3));
     }
 
     #[test]
