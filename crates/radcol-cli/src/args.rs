@@ -191,9 +191,11 @@ pub struct SolveArgs {
 
     /// Refine adaptively until the estimated max error relative to max |u| is at most TOL
     /// (in (0, 1)): elements whose estimate is large are split 4:1 and the problem
-    /// re-solved, starting from --level/--max-edge; an element is split at most 10 times
-    /// (where the error does not fall under refinement, such as the foot of a block's
-    /// corner, the loop stops and reports the error elsewhere) [default: uniform
+    /// re-solved, starting from --level/--max-edge (a scene with materials given neither:
+    /// its own triangles). Where the error stops falling under refinement (three splits in
+    /// a row that leave an element's estimate above 0.7 of its parent's, or 10 splits: the
+    /// foot of a block's corner on a floor), elements are no longer split; the loop then
+    /// stops when the rest is below TOL and names those points [default: uniform
     /// refinement only].
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub target_error: Option<f64>,
@@ -214,6 +216,12 @@ pub struct SolveArgs {
     /// seen by --camera. Refuses to overwrite without --force.
     #[arg(long, value_name = "FILE")]
     pub out: Vec<PathBuf>,
+
+    /// Write a PNG map of the estimated error seen by --camera: each element coloured by its
+    /// estimated max error relative to max |u| (worst channel), log scale from 1e-6 (dark)
+    /// to 1e-1 (bright), a colour bar with a tick per decade along the bottom edge.
+    #[arg(long, value_name = "FILE.png")]
+    pub error_map: Option<PathBuf>,
 
     /// Camera for .png/.exr as ex,ey,ez,tx,ty,tz,ux,uy,uz,fov: eye, target, up vector and
     /// vertical field of view in degrees [default: the scene's camera, else one looking at

@@ -101,13 +101,20 @@ pub fn load(spec: &SceneSpec) -> Result<Loaded> {
 
 /// The level and maximum edge to use: as given, else [`DEFAULT_LEVEL`], or for
 /// a scene with materials given neither, level 0 with edges of at most
-/// [`DEFAULT_EDGE_FRACTION`] of its bounding box's diagonal.
+/// [`DEFAULT_EDGE_FRACTION`] of its bounding box's diagonal — or, when the
+/// mesh is to be refined `adaptive`ly, the scene's own triangles: the loop
+/// puts the unknowns where the error is, and a uniform start only adds
+/// unknowns it does not need (`radcol solve cornell --target-error 1e-3`:
+/// 7 710 unknowns and 71 s from the 50 triangles, against more than 16 600
+/// and 6 minutes from the uniform default).
 pub fn default_refinement(
     loaded: &Loaded,
     level: Option<u32>,
     max_edge: Option<f64>,
+    adaptive: bool,
 ) -> (u32, Option<f64>) {
     match (level, max_edge, loaded.scene()) {
+        (None, None, Some(_)) if adaptive => (0, None),
         (None, None, Some(scene)) => {
             let (lo, hi) = scene.bounding_box();
             (0, Some(DEFAULT_EDGE_FRACTION * (hi - lo).length()))
@@ -117,11 +124,17 @@ pub fn default_refinement(
 }
 
 /// Builds what `solve` and `study` need from `p`: the scene, α, the problem,
-/// the configuration at `level` (None: the default refinement) and the backend.
-pub fn setup(p: &ProblemSpec, level: Option<u32>, max_edge: Option<f64>) -> Result<Setup> {
+/// the configuration at `level` (None: the default refinement, for an
+/// `adaptive` solve when true) and the backend.
+pub fn setup(
+    p: &ProblemSpec,
+    level: Option<u32>,
+    max_edge: Option<f64>,
+    adaptive: bool,
+) -> Result<Setup> {
     let loaded = load(&p.scene)?;
     let surface = loaded.surface().clone();
-    let (level, max_edge) = default_refinement(&loaded, level, max_edge);
+    let (level, max_edge) = default_refinement(&loaded, level, max_edge, adaptive);
     let alpha = resolve_alpha(p.alpha, p.degree);
     let backend = select_backend(p.backend, p.precision).map_err(|e| {
         bad_input(format!(

@@ -1,7 +1,7 @@
 //! `radcol solve --target-error`: the adaptive loop's steps and why it stopped.
 
 use super::{sci, secs};
-use radcol_core::run::adapt::{AdaptOptions, AdaptOutcome, AdaptStep, StopReason};
+use radcol_core::run::adapt::{AdaptOptions, AdaptOutcome, AdaptStep, SingularPoint, StopReason};
 use serde::Serialize;
 use std::fmt;
 
@@ -18,6 +18,9 @@ pub struct AdaptReport {
     stop: StopReason,
     /// Every step.
     steps: Vec<AdaptStep>,
+    /// Where the estimate stayed above the target because refinement
+    /// stopped reducing it (largest first).
+    singular_points: Vec<SingularPoint>,
 }
 
 impl AdaptReport {
@@ -29,21 +32,29 @@ impl AdaptReport {
             reached_estimate: res.steps.last().map_or(f64::NAN, |s| s.estimate),
             stop: res.stop,
             steps: res.steps.clone(),
+            singular_points: res.singular.clone(),
         }
     }
 
-    /// Whether the target was reached.
+    /// Whether the target was reached: everywhere, or everywhere but the
+    /// neighbourhoods of the singular points the report names (refinement
+    /// does not lower the error there, so no budget would reach it).
     pub fn reached(&self) -> bool {
-        self.stop == StopReason::Reached
+        matches!(self.stop, StopReason::Reached | StopReason::Singular)
     }
 
     /// One sentence: what was reached and why the loop stopped.
     pub fn summary(&self) -> String {
         let elsewhere = match self.steps.last() {
-            Some(s) if s.at_depth_limit > 0 => format!(
-                " ({} away from the {} elements at the depth limit)",
+            Some(s) if !self.singular_points.is_empty() => format!(
+                " ({} away from the {} point{} below)",
                 sci(s.estimate_elsewhere),
-                s.at_depth_limit
+                self.singular_points.len(),
+                if self.singular_points.len() == 1 {
+                    ""
+                } else {
+                    "s"
+                }
             ),
             _ => String::new(),
         };
@@ -83,11 +94,11 @@ impl fmt::Display for AdaptLine<'_> {
         if s.negative_elements > 0 {
             write!(f, ", {} with u < 0", s.negative_elements)?;
         }
-        if s.at_depth_limit > 0 {
+        if s.singular_elements > 0 {
             write!(
                 f,
-                ", {} at the depth limit (elsewhere {})",
-                s.at_depth_limit,
+                ", {} no longer split (elsewhere {})",
+                s.singular_elements,
                 sci(s.estimate_elsewhere)
             )?;
         }
@@ -108,6 +119,18 @@ impl fmt::Display for AdaptReport {
         for s in &self.steps {
             writeln!(f, "{}", AdaptLine(s))?;
         }
-        writeln!(f, "  stopped     {}", self.summary())
+        writeln!(f, "  stopped     {}", self.summary())?;
+        for p in &self.singular_points {
+            let [x, y, z] = p.position;
+            writeln!(
+                f,
+                "  singular    ({x:.6}, {y:.6}, {z:.6}) within {:.3e}: {} element{}, estimate up to {}",
+                p.radius,
+                p.elements,
+                if p.elements == 1 { "" } else { "s" },
+                sci(p.estimate)
+            )?;
+        }
+        Ok(())
     }
 }

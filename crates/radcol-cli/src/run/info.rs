@@ -29,7 +29,7 @@ const INFO_MAX_LEVEL: u32 = 24;
 /// `radcol info`: describes the scene's mesh at the job's refinement.
 pub fn run_info(job: InfoJob, w: &mut dyn Write) -> Result<()> {
     let loaded = load(&job.scene)?;
-    let (level, max_edge) = default_refinement(&loaded, job.level, job.max_edge);
+    let (level, max_edge) = default_refinement(&loaded, job.level, job.max_edge, false);
     if level > INFO_MAX_LEVEL {
         return Err(crate::error::bad_input(format!(
             "--level {level}: radcol info handles levels up to {INFO_MAX_LEVEL}"

@@ -37,7 +37,7 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
     for o in &job.outputs {
         check_writable(&o.file)?;
     }
-    let mut s = setup::setup(&job.problem, job.level, job.max_edge)?;
+    let mut s = setup::setup(&job.problem, job.level, job.max_edge, job.adapt.is_some())?;
     let look = setup::look(&job.look, &s);
     let bar = progress::Bar::for_stderr();
     s.cfg.progress = bar.as_ref().map(|b| b.handle());
@@ -86,7 +86,7 @@ fn run_study(job: StudyJob, w: &mut dyn Write) -> Result<()> {
     if let Some(p) = &job.plot {
         check_writable(p)?;
     }
-    let s = setup::setup(&job.problem, Some(*job.levels.start()), None)?;
+    let s = setup::setup(&job.problem, Some(*job.levels.start()), None, false)?;
     let checked = Study::new(&s.problem, &s.cfg, job.levels.clone()).map_err(with_flags)?;
     let header = StudyHeader::new(&s, (*job.levels.start(), *job.levels.end()));
     if !s.json {

@@ -13,14 +13,19 @@
 //! ([`AssemblyPlan::updating`](crate::assembly::AssemblyPlan::updating)):
 //! only the rows and columns of new elements are integrated.
 
+mod history;
+
+pub use history::{singular_points, SingularPoint, STALL_RATIO};
+
 use super::pipeline::{solve_step, Plans, Previous};
-use super::size::MemoryEstimate;
+use super::size::available_memory;
 use super::{discretize, SolveConfig, SolveOutcome};
 use crate::assembly::{AssemblyBackend, Unchanged};
 use crate::error::{Error, InputError};
 use crate::geometry::barycentric_st;
 use crate::mesh::Mesh;
 use crate::problem::Problem;
+use history::History;
 use serde::Serialize;
 use std::sync::Arc;
 use std::time::Instant;
@@ -47,6 +52,12 @@ pub struct AdaptOptions {
     /// touching the point does not fall under any refinement; without a cap
     /// the loop would grade towards the point until rounding breaks it.
     pub max_depth: u32,
+    /// An element whose estimate stayed above [`STALL_RATIO`] of its
+    /// parent's for this many splits in a row is not split again (0: only
+    /// the depth limit applies). At such points the depth limit alone costs
+    /// a solve per wasted generation (on the Cornell box from its 50
+    /// triangles, the last 7 of 14 steps).
+    pub stall_generations: u32,
 }
 
 impl Default for AdaptOptions {
@@ -57,6 +68,7 @@ impl Default for AdaptOptions {
             max_steps: 25,
             mark_fraction: 0.5,
             max_depth: 10,
+            stall_generations: 3,
         }
     }
 }
@@ -83,8 +95,10 @@ pub enum StopReason {
     Memory,
     /// The step limit was reached.
     MaxSteps,
-    /// Every element above the target has been split `max_depth` times: the
-    /// error is concentrated at points where refinement no longer reduces it.
+    /// The estimate is below the target except at elements that are no
+    /// longer split (their estimate stalled, or they reached the depth
+    /// limit): the error is concentrated at points where refinement does not
+    /// reduce it, named in [`AdaptOutcome::singular`].
     Singular,
 }
 
@@ -95,7 +109,7 @@ impl std::fmt::Display for StopReason {
             StopReason::MaxUnknowns => "the next step would exceed the unknowns budget",
             StopReason::Memory => "the next step's dense matrix would not fit in memory",
             StopReason::MaxSteps => "the step limit was reached",
-            StopReason::Singular => "the elements above the target are at the depth limit: the error there does not fall under refinement (typically a point where u has a direction-dependent limit, such as the foot of a block's corner on a floor)",
+            StopReason::Singular => "the estimate is below the target except next to the points listed, where it stopped falling under refinement (typically a point where u has a direction-dependent limit, such as the foot of a block's corner on a floor)",
         })
     }
 }
@@ -117,11 +131,11 @@ pub struct AdaptStep {
     pub split: usize,
     /// Elements where u_n < 0 somewhere although E, ρ ≥ 0.
     pub negative_elements: usize,
-    /// Elements above the threshold left whole because they are at the
-    /// depth limit.
-    pub at_depth_limit: usize,
-    /// The estimate (relative max, worst channel) over the elements below
-    /// the depth limit: the error away from the singular points.
+    /// Elements above the marking threshold left whole because refinement
+    /// stopped reducing their estimate (or they are at the depth limit).
+    pub singular_elements: usize,
+    /// The estimate (relative max, worst channel) over the elements still
+    /// refined: the error away from the singular points.
     pub estimate_elsewhere: f64,
     /// Wall seconds of the solve, estimate included.
     pub seconds: f64,
@@ -136,6 +150,9 @@ pub struct AdaptOutcome {
     pub steps: Vec<AdaptStep>,
     /// Why it stopped.
     pub stop: StopReason,
+    /// Where the last step's estimate is above the target on elements that
+    /// are no longer split, largest first (empty when none is).
+    pub singular: Vec<SingularPoint>,
 }
 
 /// Solves `problem` from the mesh `cfg` describes, refining where the
@@ -156,7 +173,7 @@ pub fn solve_adaptive(
     let mut mesh = discretize(problem, &cfg)?.mesh().clone();
     let f = crate::nodes::nodes_per_element(cfg.degree);
     let mut guess: Option<Vec<Vec<f64>>> = None;
-    let mut depth = vec![0u32; mesh.len()];
+    let mut history = History::new(mesh.len());
     let mut steps = Vec::new();
     // The previous solve, its plans and which elements it shares with this
     // mesh: pairs of unchanged elements are neither classified nor
@@ -182,10 +199,13 @@ pub fn solve_adaptive(
         drop(prev);
         // The previous solve has served: its matrix goes before the next one.
         drop(previous.take());
-        let (mut step, indicator) = describe(&out, &depth, opts, t.elapsed().as_secs_f64());
+        let (indicator, negative) = indicators(&out);
+        let stalls = history.stalls(&indicator);
+        let frozen = |k: usize| history.frozen(k, &stalls, opts.max_depth, opts.stall_generations);
+        let mut step = describe(&out, &indicator, &negative, &frozen, opts);
+        step.seconds = t.elapsed().as_secs_f64();
         let estimate = step.estimate;
         let threshold = opts.mark_fraction * opts.target;
-        let capped = |k: usize| depth[k] >= opts.max_depth;
         let stop = if estimate <= opts.target {
             Some(StopReason::Reached)
         } else if steps.len() + 1 >= opts.max_steps {
@@ -195,7 +215,7 @@ pub fn solve_adaptive(
         };
         let marked = match stop {
             Some(_) => Vec::new(),
-            None => mark(&indicator, threshold, &capped),
+            None => mark(&indicator, threshold, &frozen),
         };
         let stop = stop.or((marked.is_empty()).then_some(StopReason::Singular));
         let budget = budget(opts, &cfg, mesh.len(), f, marked.len());
@@ -205,10 +225,15 @@ pub fn solve_adaptive(
         on_step(&step);
         steps.push(step);
         if let Some(stop) = stop {
+            let left: Vec<usize> = (0..indicator.len())
+                .filter(|&k| frozen(k) && indicator[k] > opts.target)
+                .collect();
+            let singular = singular_points(out.discretization.mesh(), &left, &indicator);
             return Ok(AdaptOutcome {
                 outcome: out,
                 steps,
                 stop,
+                singular,
             });
         }
         let (refined, parents) = refine(&mesh, &marked[..split]);
@@ -217,10 +242,7 @@ pub fn solve_adaptive(
         for &k in &marked[..split] {
             split_mark[k] = true;
         }
-        depth = parents
-            .iter()
-            .map(|&p| depth[p] + u32::from(split_mark[p]))
-            .collect();
+        history = history.refined(&parents, &split_mark, &indicator, &stalls);
         let old_of: Vec<Option<usize>> = parents
             .iter()
             .map(|&p| (!split_mark[p]).then_some(p))
@@ -231,19 +253,18 @@ pub fn solve_adaptive(
     }
 }
 
-/// The step of `out` (solved in `seconds`, elements at `depth`), and its
-/// element indicators.
+/// The step of `out` (its element `indicator`s, where u_n is `negative`,
+/// which elements are `frozen`); `seconds` is left at 0.
 fn describe(
     out: &SolveOutcome,
-    depth: &[u32],
+    indicator: &[f64],
+    negative: &[bool],
+    frozen: &dyn Fn(usize) -> bool,
     opts: &AdaptOptions,
-    seconds: f64,
-) -> (AdaptStep, Vec<f64>) {
-    let (indicator, negative) = indicators(out);
+) -> AdaptStep {
     let (estimate, estimate_rms) = worst(out);
     let threshold = opts.mark_fraction * opts.target;
-    let capped = |k: usize| depth[k] >= opts.max_depth;
-    let step = AdaptStep {
+    AdaptStep {
         elements: indicator.len(),
         unknowns: out.discretization.len(),
         estimate,
@@ -254,16 +275,15 @@ fn describe(
         }),
         split: 0,
         negative_elements: negative.iter().filter(|&&b| b).count(),
-        at_depth_limit: (0..indicator.len())
-            .filter(|&k| capped(k) && indicator[k] > threshold)
+        singular_elements: (0..indicator.len())
+            .filter(|&k| frozen(k) && indicator[k] > threshold)
             .count(),
         estimate_elsewhere: (0..indicator.len())
-            .filter(|&k| !capped(k))
+            .filter(|&k| !frozen(k))
             .map(|k| indicator[k])
             .fold(0.0f64, f64::max),
-        seconds,
-    };
-    (step, indicator)
+        seconds: 0.0,
+    }
 }
 
 /// Per element, the worst channel's estimate relative to its max |u_n|, and
@@ -293,18 +313,27 @@ fn worst(out: &SolveOutcome) -> (f64, f64) {
         })
 }
 
-/// The elements above `threshold` that may still be split, worst first.
+/// The elements above `threshold` that may still be split (not `frozen`), worst first.
 /// (Negative u_n is part of the indicator, as |u_n|; splitting an element
 /// only because it has some does not remove them: on the Cornell box the
 /// elements with u_n < 0 sit at the feet of the blocks, where 10 splits of
 /// each left 32 of 37 negative.)
-fn mark(indicator: &[f64], threshold: f64, capped: &dyn Fn(usize) -> bool) -> Vec<usize> {
+fn mark(indicator: &[f64], threshold: f64, frozen: &dyn Fn(usize) -> bool) -> Vec<usize> {
     let mut marked: Vec<usize> = (0..indicator.len())
-        .filter(|&k| indicator[k] > threshold && !capped(k))
+        .filter(|&k| indicator[k] > threshold && !frozen(k))
         .collect();
     marked.sort_by(|&a, &b| indicator[b].total_cmp(&indicator[a]));
     marked
 }
+
+/// While a step assembles, solves and estimates, the previous step's matrix
+/// and plans are still held, and the step's own plans and estimate come on
+/// top of its matrix: on the box room going from 28 410 to 41 235 unknowns
+/// the process held 24.3 GB for 6.5 + 13.6 GB of matrices, and the kernel
+/// killed it. So a step's matrices (the LU copy included) may take at most
+/// this fraction of the memory available when the step is planned (the
+/// current matrix is already counted as used then).
+const STEP_MEMORY_FRACTION: f64 = 0.7;
 
 /// How many of the `marked` elements may be split (each adds 3 elements of
 /// `f` unknowns), or why none may.
@@ -315,8 +344,15 @@ fn budget(
     f: usize,
     marked: usize,
 ) -> Result<usize, StopReason> {
-    let fits_memory =
-        |n: u64| !cfg.check_memory || MemoryEstimate::new(n).check(cfg.solver).is_ok();
+    let available = available_memory();
+    let copies = match cfg.solver {
+        crate::run::SolverKind::Gmres => 1.0,
+        crate::run::SolverKind::Lu => 2.0,
+    };
+    let fits_memory = |n: u64| {
+        let bytes = copies * 8.0 * (n as f64).powi(2);
+        !cfg.check_memory || available.is_none_or(|a| bytes <= STEP_MEMORY_FRACTION * a as f64)
+    };
     let unknowns = |split: usize| ((elements + 3 * split) * f) as u64;
     let allowed = |split: usize| {
         opts.max_unknowns.is_none_or(|m| unknowns(split) <= m) && fits_memory(unknowns(split))
@@ -412,7 +448,7 @@ mod tests {
     }
 
     /// Marking takes the elements above the threshold, worst first, except
-    /// those at the depth limit.
+    /// those no longer split.
     #[test]
     fn marking_skips_capped_elements() {
         let ind = [0.1, 0.5, 0.01, 0.3, 0.2];

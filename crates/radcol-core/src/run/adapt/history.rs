@@ -1,0 +1,209 @@
+//! What refinement has done to each element, and where it stopped helping.
+//!
+//! At a point where u has a direction-dependent limit (the foot of a block's
+//! corner on a floor: walls, floor and the penumbra wedges of the block's
+//! vertical edges meet there, and the configuration is self-similar), the
+//! element touching the point keeps its max error under every split: its
+//! child touching the point sees the same range of directions. Elsewhere a
+//! split divides the max error by about 2^(r+1) where u is smooth, and still
+//! by about 2 next to a concave edge (u ~ x log x). So an element whose
+//! estimate stayed above [`STALL_RATIO`] of its parent's for
+//! `stall_generations` splits in a row is not split again (nor is one at the
+//! depth limit), and the elements left above the target that way are
+//! gathered into the [`SingularPoint`]s the report names.
+
+use crate::mesh::Mesh;
+use serde::Serialize;
+
+/// A split "stalls" when the child's estimate is above this fraction of its
+/// parent's (a smooth u gives 1/4 at r = 1, an x log x edge about 1/2).
+pub const STALL_RATIO: f64 = 0.7;
+
+/// Per element of the current mesh: depth beyond the starting mesh, the
+/// parent's estimate when it was split, and the run of stalled splits it
+/// inherited.
+#[derive(Clone, Debug)]
+pub(super) struct History {
+    depth: Vec<u32>,
+    parent_estimate: Vec<f64>,
+    inherited: Vec<u32>,
+}
+
+impl History {
+    /// The starting mesh of `n` elements.
+    pub fn new(n: usize) -> Self {
+        Self {
+            depth: vec![0; n],
+            parent_estimate: vec![f64::NAN; n],
+            inherited: vec![0; n],
+        }
+    }
+
+    /// Per element, how many splits in a row (ending with the one that made
+    /// it) did not lower the estimate below [`STALL_RATIO`] of the parent's,
+    /// given the current `indicator`.
+    pub fn stalls(&self, indicator: &[f64]) -> Vec<u32> {
+        indicator
+            .iter()
+            .enumerate()
+            .map(|(k, &e)| {
+                let p = self.parent_estimate[k];
+                if p.is_finite() && e > STALL_RATIO * p {
+                    self.inherited[k] + 1
+                } else {
+                    0
+                }
+            })
+            .collect()
+    }
+
+    /// Whether element k is no longer split: at `max_depth`, or its
+    /// estimate stalled `stall_generations` times in a row (0: never).
+    pub fn frozen(&self, k: usize, stalls: &[u32], max_depth: u32, stall_generations: u32) -> bool {
+        self.depth[k] >= max_depth || (stall_generations > 0 && stalls[k] >= stall_generations)
+    }
+
+    /// The history of the refined mesh whose element i came from `parents[i]`
+    /// (split when `split[parents[i]]`), given this mesh's `indicator` and
+    /// `stalls`.
+    pub fn refined(
+        &self,
+        parents: &[usize],
+        split: &[bool],
+        indicator: &[f64],
+        stalls: &[u32],
+    ) -> Self {
+        let mut next = Self::new(parents.len());
+        for (i, &p) in parents.iter().enumerate() {
+            if split[p] {
+                next.depth[i] = self.depth[p] + 1;
+                next.parent_estimate[i] = indicator[p];
+                next.inherited[i] = stalls[p];
+            } else {
+                next.depth[i] = self.depth[p];
+                next.parent_estimate[i] = self.parent_estimate[p];
+                next.inherited[i] = self.inherited[p];
+            }
+        }
+        next
+    }
+}
+
+/// A neighbourhood where refinement stopped reducing the error.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SingularPoint {
+    /// Centre of the elements left above the target there (scene units).
+    pub position: [f64; 3],
+    /// Radius of the ball about `position` that holds them.
+    pub radius: f64,
+    /// How many elements.
+    pub elements: usize,
+    /// Their largest estimate (relative to max |u_n|, worst channel).
+    pub estimate: f64,
+}
+
+/// The elements `left` (above the target, not split any more) of `mesh`,
+/// gathered into neighbourhoods: elements whose bounding balls touch belong
+/// to one; largest estimate first.
+pub fn singular_points(mesh: &Mesh, left: &[usize], indicator: &[f64]) -> Vec<SingularPoint> {
+    let balls: Vec<_> = left.iter().map(|&k| mesh.bounding_ball(k)).collect();
+    // Union-find over touching balls (a few hundred elements at most: the
+    // quadratic pass costs nothing next to a solve).
+    let mut root: Vec<usize> = (0..left.len()).collect();
+    fn find(root: &mut [usize], mut i: usize) -> usize {
+        while root[i] != i {
+            root[i] = root[root[i]];
+            i = root[i];
+        }
+        i
+    }
+    for a in 0..left.len() {
+        for b in a + 1..left.len() {
+            let ((ca, ra), (cb, rb)) = (balls[a], balls[b]);
+            if (ca - cb).length() <= 1.01 * (ra + rb) {
+                let (x, y) = (find(&mut root, a), find(&mut root, b));
+                root[x] = y;
+            }
+        }
+    }
+    let mut groups: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
+    for i in 0..left.len() {
+        let r = find(&mut root, i);
+        groups.entry(r).or_default().push(i);
+    }
+    let mut points: Vec<SingularPoint> = groups
+        .into_values()
+        .map(|members| {
+            let centre =
+                members.iter().map(|&i| balls[i].0).sum::<glam::DVec3>() / members.len() as f64;
+            let radius = members
+                .iter()
+                .map(|&i| (balls[i].0 - centre).length() + balls[i].1)
+                .fold(0.0, f64::max);
+            SingularPoint {
+                position: centre.to_array(),
+                radius,
+                elements: members.len(),
+                estimate: members
+                    .iter()
+                    .map(|&i| indicator[left[i]])
+                    .fold(0.0, f64::max),
+            }
+        })
+        .collect();
+    points.sort_by(|a, b| b.estimate.total_cmp(&a.estimate));
+    points
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::shapes::box_room;
+    use std::sync::Arc;
+
+    /// A run of stalled splits counts up through the generations and resets
+    /// on a split that lowers the estimate.
+    #[test]
+    fn stalls_count_generations_in_a_row() {
+        let h = History::new(2);
+        // Nothing to compare with on the starting mesh.
+        assert_eq!(h.stalls(&[1.0, 1.0]), vec![0, 0]);
+        let ind = [1.0, 1.0];
+        let h = h.refined(&[0, 0, 0, 0, 1], &[true, false], &ind, &[0, 0]);
+        // Children of element 0 at 0.9 (stalled) and 0.2 (fell); element 1 unsplit.
+        let ind = [0.9, 0.2, 0.2, 0.2, 1.0];
+        let s = h.stalls(&ind);
+        assert_eq!(s, vec![1, 0, 0, 0, 0]);
+        let h = h.refined(
+            &[0, 0, 0, 0, 1, 2, 3, 4],
+            &[true, false, false, false, false],
+            &ind,
+            &s,
+        );
+        let ind2 = [0.8, 0.1, 0.1, 0.1, 0.2, 0.2, 0.2, 1.0];
+        let s2 = h.stalls(&ind2);
+        assert_eq!(s2[0], 2);
+        assert!(h.frozen(0, &s2, 10, 2) && !h.frozen(0, &s2, 10, 3));
+        assert!(h.frozen(0, &s2, 2, 0) && !h.frozen(1, &s2, 10, 2));
+        // A split that lowers the estimate resets the run.
+        assert_eq!(h.stalls(&[0.5, 0.1, 0.1, 0.1, 0.2, 0.2, 0.2, 1.0])[0], 0);
+    }
+
+    /// Touching elements gather into one neighbourhood, far ones into others.
+    #[test]
+    fn neighbourhoods_gather_touching_elements() {
+        let mesh = crate::mesh::Mesh::new(Arc::new(box_room(1.0, 1.0, 1.0)), 2);
+        // Two elements sharing a vertex with element 0 (its first children's
+        // neighbours in the refinement order) and one on another wall.
+        let far = mesh.len() - 1;
+        let ind: Vec<f64> = (0..mesh.len()).map(|k| k as f64).collect();
+        let pts = singular_points(&mesh, &[0, 1, far], &ind);
+        assert_eq!(pts.len(), 2, "{pts:?}");
+        assert_eq!(pts[0].elements, 1);
+        assert_eq!(pts[0].estimate, far as f64);
+        assert_eq!(pts[1].elements, 2);
+        let (c, r) = mesh.bounding_ball(far);
+        crate::assert_close!(pts[0].radius, r, 1e-15);
+        assert!((glam::DVec3::from_array(pts[0].position) - c).length() < 1e-15);
+    }
+}
