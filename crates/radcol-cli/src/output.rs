@@ -35,6 +35,10 @@ pub fn write_all(
         if let Some(b) = bar {
             b.spin(format!("writing {path}"));
         }
+        if o.kind == OutputKind::ErrorMap {
+            written.push(write_error_map(o, look, out, t)?);
+            continue;
+        }
         if o.kind.is_image() && image.is_none() {
             if let Some(b) = bar {
                 b.spin(format!(
@@ -67,6 +71,7 @@ pub fn write_all(
                 export::exr::write(f, img).with_context(|| format!("writing {path}"))?;
                 format!("{}×{} linear radiance image", img.width, img.height)
             }
+            OutputKind::ErrorMap => unreachable!("written above"),
             OutputKind::Ply | OutputKind::Glb | OutputKind::Gltf => {
                 let vm = vertices.as_ref().expect("tessellated above");
                 let mut f = create(&o.file)?;
@@ -94,6 +99,35 @@ pub fn write_all(
         });
     }
     Ok(written)
+}
+
+/// The `--error-map` PNG: every element's estimate relative to max |u_n|
+/// (worst channel), seen by the image camera.
+fn write_error_map(o: &Output, look: &Look, out: &SolveOutcome, t: Instant) -> Result<Written> {
+    let path = o.file.path.display().to_string();
+    let mesh = out.discretization.mesh();
+    let errors = element_estimates(out)
+        .with_context(|| format!("--error-map {path}: the solve has no error estimate"))?;
+    let camera = look.camera.unwrap_or_else(|| render::auto_camera(mesh));
+    let img = render::render_element_values(mesh, &errors, &camera, &look.render)?;
+    let mut f = create(&o.file)?;
+    export::png::write(
+        &mut f,
+        img.width,
+        img.height,
+        &export::error_map::pixels(&img),
+    )
+    .and_then(|_| Ok(f.flush()?))
+    .with_context(|| format!("writing {path}"))?;
+    let (lo, hi) = export::error_map::DECADES;
+    Ok(Written {
+        path,
+        what: format!(
+            "{}×{} error map (estimated max error / max |u| per element, log scale 1e{lo} .. 1e{hi})",
+            img.width, img.height
+        ),
+        seconds: t.elapsed().as_secs_f64(),
+    })
 }
 
 /// Opens `file` for writing: a fresh file, or (with `--force`) a truncated one.

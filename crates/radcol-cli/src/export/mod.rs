@@ -5,6 +5,7 @@
 //! pixels, [`radcol_core::render::VertexMesh`]) and any `Write`, so the caller
 //! opens files through `output::create` (which honours --force).
 
+pub mod error_map;
 pub mod exr;
 pub mod gltf;
 pub mod ply;

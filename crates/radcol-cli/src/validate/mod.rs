@@ -13,7 +13,7 @@ use crate::args::{
 use crate::error::{bad_input, BadInput};
 use crate::scene::SceneSpec;
 use anyhow::{Context, Result};
-use outputs::{look, output, svg_file};
+use outputs::{error_map, look, output, svg_file};
 use radcol_core::assembly::{QuadratureOptions, VisibilityMode};
 use radcol_core::nodes::{check_alpha, check_degree};
 use radcol_core::problem::Field;
@@ -157,6 +157,21 @@ fn solve_job(a: SolveArgs) -> Result<SolveJob> {
     }
     let max_edge = a.max_edge.map(check_max_edge).transpose()?;
     let problem = problem(&a.problem)?;
+    if let Some(p) = &a.error_map {
+        if !problem.estimate {
+            return Err(bad_input(
+                "--error-map shows the error estimate: it cannot be used with --no-estimate",
+            )
+            .into());
+        }
+        let map = error_map(p, a.problem.force)?;
+        if outputs.iter().any(|o| o.file.path == map.file.path) {
+            return Err(
+                bad_input(format!("--error-map {} is also an --out file", p.display())).into(),
+            );
+        }
+        outputs.push(map);
+    }
     let look = look(&a)?;
     let adapt = a
         .target_error

@@ -22,6 +22,8 @@ pub enum OutputKind {
     Png,
     /// Linear radiance image.
     Exr,
+    /// Map of the element error estimates (`--error-map`, PNG).
+    ErrorMap,
 }
 
 impl OutputKind {
@@ -94,6 +96,29 @@ pub(super) fn output(path: &Path, force: bool) -> Result<Output, BadInput> {
         flag: "--out",
     };
     Ok(Output { kind, file })
+}
+
+/// An `--error-map` path: only PNG.
+pub(super) fn error_map(path: &Path, force: bool) -> Result<Output, BadInput> {
+    let ok = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if !ok {
+        return Err(bad_input(format!(
+            "--error-map {}: the error map is a PNG image (the file name must end in .png)",
+            path.display()
+        )));
+    }
+    let file = OutputFile {
+        path: path.to_path_buf(),
+        force,
+        flag: "--error-map",
+    };
+    Ok(Output {
+        kind: OutputKind::ErrorMap,
+        file,
+    })
 }
 
 /// Camera, image size, exposure and tessellation; checked even when no image

@@ -172,11 +172,52 @@ pub fn render_with(
     opts: &RenderOptions,
 ) -> Result<Image, RenderError> {
     check_solutions(mesh, solutions)?;
+    trace(bvh, camera, opts, &|hit: Option<&Hit>| {
+        Some(match hit {
+            Some(h) if h.front => eval_rgb(solutions, h.element, h.st[0], h.st[1]).map(|u| u / PI),
+            Some(_) => [0.0; 3],
+            None => opts.background.map(f64::from),
+        })
+    })
+}
+
+/// A per-element value seen by `camera`: each pixel holds the mean of
+/// `per_element` (length `mesh.len()`) over its rays that hit a front face
+/// (NaN when none did), grey replicated to three channels; back faces and
+/// misses are left out of the mean, not averaged in as black. For maps of
+/// the element error estimates.
+pub fn render_element_values(
+    mesh: &Mesh,
+    per_element: &[f64],
+    camera: &Camera,
+    opts: &RenderOptions,
+) -> Result<Image, RenderError> {
+    if per_element.len() != mesh.len() {
+        return Err(RenderError::MeshMismatch {
+            channel: 0,
+            elements: per_element.len(),
+            expected: mesh.len(),
+        });
+    }
+    let bvh = ElementBvh::new(mesh, opts.curved_subdivisions);
+    trace(&bvh, camera, opts, &|hit: Option<&Hit>| {
+        hit.filter(|h| h.front).map(|h| [per_element[h.element]; 3])
+    })
+}
+
+/// The pixel loop: `samples`² rays per pixel on a regular sub-grid; each
+/// pixel is the mean of `shade` over its rays (a hit, or None for a miss)
+/// where `shade` gives a value, NaN where it gives none. Rows in parallel.
+fn trace(
+    bvh: &ElementBvh,
+    camera: &Camera,
+    opts: &RenderOptions,
+    shade: &(dyn Fn(Option<&Hit>) -> Option<[f64; 3]> + Sync),
+) -> Result<Image, RenderError> {
     let RenderOptions {
         width,
         height,
         samples,
-        background,
         ..
     } = *opts;
     if width == 0 || height == 0 || samples == 0 {
@@ -198,31 +239,29 @@ pub fn render_with(
         .for_each(|(y, (row, cov))| {
             for x in 0..w {
                 let mut acc = [0.0f64; 3];
-                let mut hits = 0u32;
+                let (mut hits, mut shaded) = (0u32, 0u32);
                 for j in 0..samples {
                     for i in 0..samples {
                         let px = x as f64 + (i as f64 + 0.5) / n;
                         let py = y as f64 + (j as f64 + 0.5) / n;
                         let dir = camera.ray_direction(px, py, width, height);
-                        match bvh.closest_hit(camera.eye, dir) {
-                            Some(hit) => {
-                                hits += 1;
-                                if hit.front {
-                                    let u = eval_rgb(solutions, hit.element, hit.st[0], hit.st[1]);
-                                    for c in 0..3 {
-                                        acc[c] += u[c] / PI;
-                                    }
-                                }
-                            }
-                            None => {
-                                for c in 0..3 {
-                                    acc[c] += background[c] as f64;
-                                }
+                        let hit = bvh.closest_hit(camera.eye, dir);
+                        hits += u32::from(hit.is_some());
+                        if let Some(v) = shade(hit.as_ref()) {
+                            shaded += 1;
+                            for c in 0..3 {
+                                acc[c] += v[c];
                             }
                         }
                     }
                 }
-                row[x] = acc.map(|a| (a * weight) as f32);
+                // 1 / shaded is `weight` exactly when every ray counts.
+                let mean = if shaded > 0 {
+                    1.0 / shaded as f64
+                } else {
+                    f64::NAN
+                };
+                row[x] = acc.map(|a| (a * mean) as f32);
                 cov[x] = (hits as f64 * weight) as f32;
             }
         });
