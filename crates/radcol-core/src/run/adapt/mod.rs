@@ -329,11 +329,13 @@ fn mark(indicator: &[f64], threshold: f64, frozen: &dyn Fn(usize) -> bool) -> Ve
 /// While a step assembles, solves and estimates, the previous step's matrix
 /// and plans are still held, and the step's own plans and estimate come on
 /// top of its matrix: on the box room going from 28 410 to 41 235 unknowns
-/// the process held 24.3 GB for 6.5 + 13.6 GB of matrices, and the kernel
-/// killed it. So a step's matrices (the LU copy included) may take at most
-/// this fraction of the memory available when the step is planned (the
-/// current matrix is already counted as used then).
-const STEP_MEMORY_FRACTION: f64 = 0.7;
+/// the process reached 24.3 GB for 6.5 + 13.6 GB of matrices, and the kernel
+/// killed it (the budget then allowed the new matrix 0.9 of the memory
+/// available); allowed 0.7, it went to 36 231 unknowns and peaked at 21.8 GB
+/// for 6.5 + 10.5 GB. So a step's matrices (the LU copy included) may take
+/// at most this fraction of the memory available when the step is planned
+/// (the current matrix already counts as used then).
+const STEP_MEMORY_FRACTION: f64 = 0.6;
 
 /// How many of the `marked` elements may be split (each adds 3 elements of
 /// `f` unknowns), or why none may.
