@@ -16,6 +16,10 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
         "an empty 4 x 3 x 5 m box room with white walls and a 1 x 1 m ceiling light (convex: no visibility tests)",
     ),
     (
+        "lroom",
+        "an L-shaped 3 m high room (legs 6 x 4 and 3 x 4 m) with a ceiling light in one leg: concave edges and the shadow of its re-entrant corner",
+    ),
+    (
         "shadow",
         "a floor lit by a square light through a floating square occluder (umbra and penumbra; exact answer by Lambert's formula)",
     ),
@@ -51,6 +55,19 @@ pub fn builtin(name: &str) -> Option<Result<Scene, SceneError>> {
                 target: DVec3::new(2.0, 1.3, 5.0),
                 up: DVec3::Y,
                 fov_y_deg: 60.0,
+            },
+        ),
+        "lroom" => (
+            include_str!("../../../../scenes/lroom.obj"),
+            "lroom.mtl",
+            include_str!("../../../../scenes/lroom.mtl"),
+            // In the lit leg's corner, looking down the room towards the
+            // re-entrant edge and the second leg behind it.
+            Camera {
+                eye: DVec3::new(5.6, 1.7, 0.3),
+                target: DVec3::new(1.5, 1.0, 6.0),
+                up: DVec3::Y,
+                fov_y_deg: 70.0,
             },
         ),
         "shadow" => (
