@@ -276,6 +276,17 @@ pub struct StudyArgs {
     /// refuses to overwrite without --force.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
+
+    /// Compare the degrees A..B, each at its auto α: a table per degree, then the fastest
+    /// setting (degree, level or adaptive step) for each decade of error [default: --degree
+    /// alone].
+    #[arg(long, value_name = "A..B", conflicts_with = "degree")]
+    pub degrees: Option<String>,
+
+    /// For each degree, also refine adaptively to TOL (estimated max error relative to max
+    /// |u|) from the first level: every step is a row of the comparison.
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    pub adaptive: Option<f64>,
 }
 
 /// `radcol nodes`.

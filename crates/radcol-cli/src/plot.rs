@@ -333,6 +333,7 @@ mod tests {
             estimate_l2: None,
             effectivity: None,
             rounding_floor: 2.2e-13,
+            scale: 1.0,
         }
     }
 

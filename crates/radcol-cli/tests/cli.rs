@@ -957,3 +957,215 @@ fn cornell_shows_no_negative_light_at_the_default_settings() {
     let vertices = read_ply(&raw);
     assert!(vertices.iter().any(|(_, _, u)| u.iter().any(|&x| x < 0.0)));
 }
+
+/// `radcol study --degrees A..B --adaptive TOL`: a study per degree at its
+/// auto α, an adaptive run per degree, and per decade of error the fastest
+/// setting among all of them; the JSON carries every setting, so the
+/// ranking is checked against them here.
+#[test]
+fn study_compares_degrees_and_names_the_fastest_per_decade() {
+    let v = stdout_json(&radcol(&[
+        "study",
+        "sphere",
+        "--degrees",
+        "0..1",
+        "--levels",
+        "0..1",
+        "--rho",
+        "0.5",
+        "--emission",
+        "exp(z)",
+        "--exact",
+        "exp(z) + 1.1752011936438014",
+        "--adaptive",
+        "5e-2",
+        "--json",
+    ]));
+    let parts = v["degrees"].as_array().unwrap();
+    assert_eq!(parts.len(), 2);
+    for (r, p) in parts.iter().enumerate() {
+        assert_eq!(p["degree"], r);
+        assert_eq!(p["alpha_auto"], true);
+        assert_eq!(p["rows"].as_array().unwrap().len(), 2);
+        assert!(!p["adaptive"]["steps"].as_array().unwrap().is_empty());
+    }
+    let settings = v["settings"].as_array().unwrap();
+    // 2 degrees × (2 levels + their adaptive steps).
+    let steps: usize = parts
+        .iter()
+        .map(|p| p["adaptive"]["steps"].as_array().unwrap().len())
+        .sum();
+    assert_eq!(settings.len(), 4 + steps);
+    let fastest = v["fastest"].as_array().unwrap();
+    assert!(!fastest.is_empty());
+    for d in fastest {
+        let bound = 10f64.powi(d["exponent"].as_i64().unwrap() as i32);
+        let best = &d["fastest"];
+        assert!(num(best, "error") <= bound, "{d}");
+        for s in settings.iter().filter(|s| num(s, "error") <= bound) {
+            assert!(num(best, "seconds") <= num(s, "seconds"), "{d} vs {s}");
+            assert!(num(&d["fewest_unknowns"], "unknowns") <= num(s, "unknowns"));
+        }
+    }
+    // The text ends with the ranking.
+    let text = radcol(&[
+        "study",
+        "sphere",
+        "--degrees",
+        "0..1",
+        "--levels",
+        "0..1",
+        "--exact",
+        "1",
+    ]);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(
+        text.contains("fastest setting per decade of error"),
+        "{text}"
+    );
+    assert!(text.contains("<= 1e"), "{text}");
+    for (args, needles) in [
+        (
+            vec![
+                "study",
+                "sphere",
+                "--levels",
+                "0..1",
+                "--degrees",
+                "0..9",
+                "--exact",
+                "1",
+            ],
+            vec!["--degrees", "0..=6"],
+        ),
+        (
+            vec![
+                "study",
+                "sphere",
+                "--levels",
+                "0..1",
+                "--degrees",
+                "2..1",
+                "--exact",
+                "1",
+            ],
+            vec!["--degrees", "greater"],
+        ),
+        (
+            vec![
+                "study",
+                "sphere",
+                "--levels",
+                "0..1",
+                "--degrees",
+                "0..1",
+                "--alpha",
+                "0.1",
+                "--exact",
+                "1",
+            ],
+            vec!["--degrees", "--alpha"],
+        ),
+        (
+            vec![
+                "study",
+                "sphere",
+                "--levels",
+                "0..1",
+                "--adaptive",
+                "0",
+                "--exact",
+                "1",
+            ],
+            vec!["--adaptive", "(0, 1)"],
+        ),
+        (
+            vec![
+                "study",
+                "sphere",
+                "--levels",
+                "0..1",
+                "--adaptive",
+                "1e-2",
+                "--plot",
+                "p.svg",
+                "--exact",
+                "1",
+            ],
+            vec!["--plot", "--adaptive"],
+        ),
+    ] {
+        assert_one_line_error(&args, 2, &needles);
+    }
+}
+
+/// `--error-map` writes a PNG of the element estimates: the scene's pixels
+/// take colours of the scale (brighter where the estimate is larger), the
+/// bottom rows are the colour bar; a non-PNG name, and --no-estimate, are
+/// refused before any work.
+#[test]
+fn error_map_shows_the_estimate() {
+    let dir = scratch("error_map");
+    let map = dir.join("err.png");
+    let out = radcol(&[
+        "solve",
+        "shadow",
+        "--level",
+        "1",
+        "--width",
+        "80",
+        "--height",
+        "60",
+        "--error-map",
+        map.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&map).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!((info.width, info.height), (80, 60));
+    let px = |x: usize, y: usize| {
+        let i = 3 * (y * 80 + x);
+        [buf[i], buf[i + 1], buf[i + 2]]
+    };
+    // The bar runs from viridis's dark purple to its bright yellow.
+    let (left, right) = (px(1, 59), px(78, 59));
+    assert!(
+        left[2] > left[1] && right[1] > right[2],
+        "{left:?} {right:?}"
+    );
+    // The scene above the bar: more than one colour (the estimate varies).
+    let mut colours: Vec<[u8; 3]> = (0..45)
+        .flat_map(|y| (0..80).map(move |x| (x, y)))
+        .map(|(x, y)| px(x, y))
+        .collect();
+    colours.sort();
+    colours.dedup();
+    assert!(colours.len() > 5, "{} colours", colours.len());
+    assert_one_line_error(
+        &[
+            "solve",
+            "shadow",
+            "--error-map",
+            dir.join("e.jpg").to_str().unwrap(),
+        ],
+        2,
+        &["--error-map", "PNG"],
+    );
+    assert_one_line_error(
+        &[
+            "solve",
+            "shadow",
+            "--no-estimate",
+            "--error-map",
+            map.to_str().unwrap(),
+        ],
+        2,
+        &["--error-map", "--no-estimate"],
+    );
+}

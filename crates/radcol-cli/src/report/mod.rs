@@ -3,12 +3,14 @@
 //! Pure formatting: every number comes from core.
 
 mod adapt;
+mod compare;
 mod info;
 mod nodes;
 mod solve;
 mod study;
 
 pub use adapt::{AdaptLine, AdaptReport};
+pub use compare::{ComparisonReport, DegreePart, Fastest};
 pub use info::{
     BoundingBox, ElementSize, Estimate, InfoReport, MaterialInfo, SceneInfo, ShapeRatio,
 };

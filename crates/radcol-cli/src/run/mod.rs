@@ -6,16 +6,17 @@ mod info;
 
 use crate::error::with_flags;
 use crate::report::{
-    self, AdaptLine, AdaptReport, NodesReport, SolveReport, StudyFooter, StudyHeader, StudyLine,
-    StudyReport,
+    self, AdaptLine, AdaptReport, ComparisonReport, DegreePart, Fastest, NodesReport, SolveReport,
+    StudyFooter, StudyHeader, StudyLine, StudyReport,
 };
 use crate::setup::{self, check_writable, resolve_alpha};
 use crate::validate::{Config, NodesJob, SolveJob, StudyJob};
 use crate::{output, plot, progress};
 use anyhow::{Context, Result};
 use radcol_core::nodes::NodeSet;
-use radcol_core::run::adapt::solve_adaptive;
+use radcol_core::run::adapt::{solve_adaptive, AdaptOptions};
 use radcol_core::run::solve;
+use radcol_core::study::speed::{adaptive_settings, fastest_per_decade, uniform_settings};
 use radcol_core::study::{predicted_orders, Study};
 use std::io::{self, Write};
 
@@ -83,12 +84,45 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
 }
 
 fn run_study(job: StudyJob, w: &mut dyn Write) -> Result<()> {
+    if job.degrees.is_some() || job.adaptive.is_some() {
+        return run_comparison(job, w);
+    }
     if let Some(p) = &job.plot {
         check_writable(p)?;
     }
     let s = setup::setup(&job.problem, Some(*job.levels.start()), None, false)?;
-    let checked = Study::new(&s.problem, &s.cfg, job.levels.clone()).map_err(with_flags)?;
-    let header = StudyHeader::new(&s, (*job.levels.start(), *job.levels.end()));
+    let (header, rows) = uniform_study(&s, &job.levels, w)?;
+    let theory = predicted_orders(s.cfg.degree, s.alpha.value, &s.alpha.a0);
+    let plot_path = match &job.plot {
+        Some(file) => {
+            let svg = plot::study_svg(&rows, &header.title());
+            let mut f = output::create(file)?;
+            f.write_all(svg.as_bytes())
+                .and_then(|_| f.flush())
+                .with_context(|| format!("writing {}", file.path.display()))?;
+            Some(file.path.display().to_string())
+        }
+        None => None,
+    };
+    let footer = StudyFooter::new(&rows, theory, plot_path);
+    if s.json {
+        report::emit(w, &StudyReport::new(header, rows, footer), true)
+    } else {
+        write!(w, "{footer}")?;
+        Ok(())
+    }
+}
+
+/// The uniform study of `s` over `levels`: checked (the finest level must
+/// fit) before the first level is solved; in text, the header and each row
+/// printed as they come.
+fn uniform_study(
+    s: &setup::Setup,
+    levels: &std::ops::RangeInclusive<u32>,
+    w: &mut dyn Write,
+) -> Result<(StudyHeader, Vec<radcol_core::study::StudyRow>)> {
+    let checked = Study::new(&s.problem, &s.cfg, levels.clone()).map_err(with_flags)?;
+    let header = StudyHeader::new(s, (*levels.start(), *levels.end()));
     if !s.json {
         write!(w, "{header}")?;
         w.flush()?;
@@ -107,23 +141,68 @@ fn run_study(job: StudyJob, w: &mut dyn Write) -> Result<()> {
     if let Some(e) = write_error {
         return Err(e.into());
     }
-    let theory = predicted_orders(s.cfg.degree, s.alpha.value, &s.alpha.a0);
-    let plot_path = match &job.plot {
-        Some(file) => {
-            let svg = plot::study_svg(&rows, &header.title());
-            let mut f = output::create(file)?;
-            f.write_all(svg.as_bytes())
-                .and_then(|_| f.flush())
-                .with_context(|| format!("writing {}", file.path.display()))?;
-            Some(file.path.display().to_string())
+    Ok((header, rows))
+}
+
+/// `--degrees` and `--adaptive`: per degree (at its auto α with
+/// `--degrees`) the uniform study and, when asked, the adaptive run from the
+/// first level; then the fastest setting per decade of error.
+fn run_comparison(job: StudyJob, w: &mut dyn Write) -> Result<()> {
+    let degrees = job
+        .degrees
+        .clone()
+        .unwrap_or(job.problem.degree..=job.problem.degree);
+    let mut parts = Vec::new();
+    let mut settings = Vec::new();
+    for r in degrees {
+        let mut spec = job.problem.clone();
+        spec.degree = r;
+        let s = setup::setup(&spec, Some(*job.levels.start()), None, false)?;
+        let (header, rows) = uniform_study(&s, &job.levels, w)?;
+        let theory = predicted_orders(s.cfg.degree, s.alpha.value, &s.alpha.a0);
+        let footer = StudyFooter::new(&rows, theory, None);
+        if !s.json {
+            write!(w, "{footer}")?;
         }
-        None => None,
+        settings.extend(uniform_settings(r, &rows));
+        let adaptive = match job.adaptive {
+            Some(target) => {
+                let opts = AdaptOptions {
+                    target,
+                    ..Default::default()
+                };
+                let res = solve_adaptive(&s.problem, &s.cfg, &opts, s.backend.as_ref(), |_| {})
+                    .map_err(with_flags)?;
+                settings.extend(adaptive_settings(r, &res.steps));
+                let report = AdaptReport::new(&opts, &res);
+                if !s.json {
+                    write!(w, "{report}")?;
+                }
+                Some(report)
+            }
+            None => None,
+        };
+        parts.push(DegreePart {
+            study: StudyReport::new(header, rows, footer),
+            adaptive,
+        });
+        if !job.problem.json {
+            writeln!(w)?;
+        }
+    }
+    let fastest = Fastest {
+        fastest: fastest_per_decade(&settings),
+        settings,
     };
-    let footer = StudyFooter::new(&rows, theory, plot_path);
-    if s.json {
-        report::emit(w, &StudyReport::new(header, rows, footer), true)
+    if job.problem.json {
+        let report = ComparisonReport {
+            command: "study",
+            degrees: parts,
+            fastest,
+        };
+        report::emit(w, &report, true)
     } else {
-        write!(w, "{footer}")?;
+        write!(w, "{fastest}")?;
         Ok(())
     }
 }

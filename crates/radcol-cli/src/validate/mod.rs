@@ -46,7 +46,7 @@ pub enum AlphaSpec {
 }
 
 /// The problem and discretization settings `solve` and `study` share.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct ProblemSpec {
     /// The scene as given (not loaded yet).
     pub scene: SceneSpec,
@@ -106,6 +106,10 @@ pub struct StudyJob {
     pub levels: RangeInclusive<u32>,
     /// SVG plot file.
     pub plot: Option<OutputFile>,
+    /// Degrees to compare (each at its auto α), when asked for.
+    pub degrees: Option<RangeInclusive<usize>>,
+    /// Adaptive refinement to this target as well, for each degree.
+    pub adaptive: Option<f64>,
 }
 
 /// `radcol nodes`.
@@ -237,10 +241,49 @@ fn study_job(a: StudyArgs) -> Result<StudyJob> {
         .as_deref()
         .map(|p| svg_file(p, a.problem.force))
         .transpose()?;
+    let degrees = a
+        .degrees
+        .as_deref()
+        .map(|t| {
+            let d = parse_range("--degrees", t, "a degree")?;
+            for r in [*d.start(), *d.end()] {
+                check_degree(r as usize).map_err(|e| bad_input(format!("--degrees {t}: {e}")))?;
+            }
+            Ok::<_, BadInput>(*d.start() as usize..=*d.end() as usize)
+        })
+        .transpose()?;
+    if degrees.is_some() && problem.alpha != AlphaSpec::Auto {
+        return Err(bad_input(
+            "--degrees compares each degree at its own auto α: it cannot be used with --alpha",
+        )
+        .into());
+    }
+    if let Some(t) = a.adaptive {
+        if !(t > 0.0 && t < 1.0) {
+            return Err(bad_input(format!(
+                "--adaptive {t}: the target (max error relative to max |u|) must lie in (0, 1)"
+            ))
+            .into());
+        }
+        if !problem.estimate {
+            return Err(bad_input(
+                "--adaptive refines where the error estimate is large: it cannot be used with --no-estimate",
+            )
+            .into());
+        }
+    }
+    if plot.is_some() && (degrees.is_some() || a.adaptive.is_some()) {
+        return Err(bad_input(
+            "--plot draws one degree's uniform study: it cannot be used with --degrees or --adaptive (their table ends with the fastest setting per error decade)",
+        )
+        .into());
+    }
     Ok(StudyJob {
         problem,
         levels,
         plot,
+        degrees,
+        adaptive: a.adaptive,
     })
 }
 
@@ -384,27 +427,34 @@ fn open_unit(name: &str, v: f64) -> Result<f64, BadInput> {
 
 /// `A..B` or `A..=B`, both inclusive, A <= B.
 pub fn parse_levels(text: &str) -> Result<RangeInclusive<u32>, BadInput> {
+    parse_range("--levels", text, "a level")
+}
+
+/// `A..B` or `A..=B` (inclusive) of whole numbers for `flag`; `what` names
+/// one of them in messages.
+fn parse_range(flag: &str, text: &str, what: &str) -> Result<RangeInclusive<u32>, BadInput> {
     let t = text.trim();
     let (a, b) = t
         .split_once("..=")
         .or_else(|| t.split_once(".."))
         .ok_or_else(|| {
             bad_input(format!(
-                "--levels '{t}': expected A..B (inclusive), e.g. 0..3"
+                "{flag} '{t}': expected A..B (inclusive), e.g. 0..3"
             ))
         })?;
-    let level = |s: &str| {
+    let number = |s: &str| {
         s.trim().parse::<u32>().map_err(|_| {
             bad_input(format!(
-                "--levels '{t}': '{}' is not a level (a whole number >= 0); expected A..B, e.g. 0..3",
+                "{flag} '{t}': '{}' is not {what} (a whole number >= 0); expected A..B, e.g. 0..3",
                 s.trim()
             ))
         })
     };
-    let (a, b) = (level(a)?, level(b)?);
+    let (a, b) = (number(a)?, number(b)?);
     if a > b {
         return Err(bad_input(format!(
-            "--levels '{t}': the first level {a} is greater than the last {b}"
+            "{flag} '{t}': the first {} {a} is greater than the last {b}",
+            what.trim_start_matches("a ")
         )));
     }
     Ok(a..=b)
