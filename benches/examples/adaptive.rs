@@ -5,11 +5,18 @@
 //! as ratios within a run.
 //!
 //!     cargo run --release -p radcol-benches --example adaptive [-- --deep] [-- --cornell]
+//!     cargo run --release -p radcol-benches --example adaptive -- --degrees 1,2,3 [--deep]
+//!
+//! `--degrees` runs the shadowed floor adaptively at each degree given (auto
+//! α), the measurement behind the choice of one degree for every element:
+//! where the solution is rough (penumbrae) low degrees are cheaper per
+//! unit of error, where it is smooth high ones.
 //!
 //! Uniform refinement stops at `UNIFORM_CAP` unknowns (a dense matrix of
 //! 3.2 GB); a target it has not reached by then is reported as such.
 
 use glam::DVec3;
+use radcol_core::alpha0::auto_alpha;
 use radcol_core::assembly::CpuBackend;
 use radcol_core::geometry::shapes::floor_under_occluder;
 use radcol_core::problem::{Field, Problem};
@@ -96,6 +103,29 @@ fn main() {
     } else {
         &[1e-2, 1e-3]
     };
+    if let Some(i) = args.iter().position(|a| a == "--degrees") {
+        let degrees: Vec<usize> = args
+            .get(i + 1)
+            .expect("--degrees R,R,…")
+            .split(',')
+            .map(|r| r.parse().expect("a degree"))
+            .collect();
+        for &target in targets {
+            for &r in &degrees {
+                let cfg = SolveConfig {
+                    degree: r,
+                    alpha: auto_alpha(r),
+                    level: 1,
+                    ..Default::default()
+                };
+                println!(
+                    "shadowed floor, r = {r}, target {target:.0e}: adaptive {}",
+                    adaptive(&shadow_problem(), &cfg, target)
+                );
+            }
+        }
+        return;
+    }
     let mut cases = vec![(
         "shadowed floor, r = 1".to_string(),
         shadow_problem(),
