@@ -9,6 +9,7 @@
 
 mod box_constant;
 mod contact;
+mod discontinuity;
 mod edges;
 mod ellipsoid_orders;
 mod estimate;

@@ -24,10 +24,10 @@ use std::sync::Arc;
 const RHO_FLOOR: f64 = 0.9;
 
 /// One member of the family: emitter and occluder polygons.
-struct Case {
-    name: &'static str,
-    emitter: Vec<DVec3>,
-    occluder: Vec<DVec3>,
+pub(crate) struct Case {
+    pub(crate) name: &'static str,
+    pub(crate) emitter: Vec<DVec3>,
+    pub(crate) occluder: Vec<DVec3>,
 }
 
 fn square(cx: f64, cy: f64, hx: f64, hy: f64, z: f64) -> Vec<DVec3> {
@@ -39,7 +39,7 @@ fn square(cx: f64, cy: f64, hx: f64, hy: f64, z: f64) -> Vec<DVec3> {
     ]
 }
 
-fn cases() -> Vec<Case> {
+pub(crate) fn cases() -> Vec<Case> {
     vec![
         Case {
             name: "square emitter, square occluder",
@@ -124,7 +124,16 @@ fn floor_u(case: &Case, p: DVec3) -> f64 {
 }
 
 fn problem(case: &Case) -> Problem {
-    let surface = Arc::new(floor_under_occluder(&case.emitter, &case.occluder));
+    problem_on(
+        case,
+        Arc::new(floor_under_occluder(&case.emitter, &case.occluder)),
+    )
+}
+
+/// The problem of `case` on `surface` (its floor, emitter and occluder
+/// patches in that order, as `floor_under_occluder` makes them, the floor
+/// triangulated any way).
+pub(crate) fn problem_on(case: &Case, surface: Arc<radcol_core::geometry::Surface>) -> Problem {
     let mut p = Problem::new(
         surface,
         Field::PerPatch(Arc::new(vec![RHO_FLOOR, 0.0, 0.0])),
