@@ -206,7 +206,8 @@ pub struct SolveArgs {
     pub max_unknowns: Option<u64>,
 
     /// With --target-error: fail (exit 1, outputs still written) when the target is not
-    /// reached within the budget.
+    /// reached within the budget (a stop where only the neighbourhoods of the singular
+    /// points the report names are above it counts as reached).
     #[arg(long, requires = "target_error")]
     pub strict: bool,
 

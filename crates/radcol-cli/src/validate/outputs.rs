@@ -100,24 +100,42 @@ pub(super) fn output(path: &Path, force: bool) -> Result<Output, BadInput> {
 
 /// An `--error-map` path: only PNG.
 pub(super) fn error_map(path: &Path, force: bool) -> Result<Output, BadInput> {
-    let ok = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
-    if !ok {
-        return Err(bad_input(format!(
-            "--error-map {}: the error map is a PNG image (the file name must end in .png)",
-            path.display()
-        )));
-    }
-    let file = OutputFile {
-        path: path.to_path_buf(),
+    let file = only(
+        "--error-map",
+        "png",
+        path,
         force,
-        flag: "--error-map",
-    };
+        "the error map is a PNG image",
+    )?;
     Ok(Output {
         kind: OutputKind::ErrorMap,
         file,
+    })
+}
+
+/// `path` for `flag`, which writes only files ending in `.ext` (`why` says
+/// so in the refusal).
+fn only(
+    flag: &'static str,
+    ext: &str,
+    path: &Path,
+    force: bool,
+    why: &str,
+) -> Result<OutputFile, BadInput> {
+    let ok = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case(ext));
+    if !ok {
+        return Err(bad_input(format!(
+            "{flag} {}: {why} (the file name must end in .{ext})",
+            path.display()
+        )));
+    }
+    Ok(OutputFile {
+        path: path.to_path_buf(),
+        force,
+        flag,
     })
 }
 
@@ -196,19 +214,5 @@ pub fn parse_exposure(text: &str) -> Result<ToneMap, BadInput> {
 
 /// A `--plot` path: only SVG.
 pub(super) fn svg_file(path: &Path, force: bool) -> Result<OutputFile, BadInput> {
-    let ok = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
-    if !ok {
-        return Err(bad_input(format!(
-            "--plot {}: only .svg plots for now (the file name must end in .svg)",
-            path.display()
-        )));
-    }
-    Ok(OutputFile {
-        path: path.to_path_buf(),
-        force,
-        flag: "--plot",
-    })
+    only("--plot", "svg", path, force, "only .svg plots for now")
 }
