@@ -31,6 +31,7 @@
 
 use crate::assembly::{AssemblyPlan, FillMode};
 use crate::discretization::Discretization;
+use crate::matrix::DenseMatrix;
 use crate::nodes::{NodeSet, MAX_DEGREE};
 use crate::norms::LATTICE;
 use crate::quadrature::RuleLadder;
@@ -124,13 +125,88 @@ pub struct ChannelFields<'a> {
 
 /// The estimate of every channel, with `check` the plan from u_n's basis
 /// to the check points ([`AssemblyPlan::at_points`] with the
-/// [`check_nodes`] on the solutions' mesh).
+/// [`check_nodes`] on the solutions' mesh), filled and contracted one row
+/// block at a time (memory O(f·N)).
 pub fn estimate(check: &AssemblyPlan, channels: &[ChannelFields<'_>]) -> Vec<ErrorEstimate> {
-    let disc = check.rows();
-    let n = disc.mesh().len();
-    let fc = disc.nodes_per_element();
+    let fc = check.rows().nodes_per_element();
     let ncols = check.dim();
-    // u_n at the check points: its coefficients in the check basis.
+    let n = check.rows().mesh().len();
+    residuals(check, channels, |coeffs| {
+        (0..n)
+            .into_par_iter()
+            .map_init(
+                || vec![0.0; fc * ncols],
+                |block, kp| {
+                    check.fill_block(kp, block, FillMode::All);
+                    contract(kp, block, fc, ncols, channels, coeffs)
+                },
+            )
+            .collect()
+    })
+}
+
+/// The check rows of `check` as one matrix (f_c·n × N), the pairs of
+/// unchanged elements copied from `previous` (the matrix of the plan
+/// `check` was updated from) when given: the adaptive loop keeps it for the
+/// next step, where most pairs are unchanged. Returns the matrix and the
+/// kernel evaluations spent.
+pub fn check_matrix(check: &AssemblyPlan, previous: Option<&DenseMatrix>) -> (DenseMatrix, u64) {
+    let fc = check.rows().nodes_per_element();
+    let f = check.discretization().nodes_per_element();
+    let ncols = check.dim();
+    let mut m = DenseMatrix::zeros(check.rows().len(), ncols);
+    let mode = match (previous, check.unchanged()) {
+        (Some(prev), Some(u)) => {
+            u.copy_blocks_of(prev, &mut m, fc, f);
+            FillMode::NotReused
+        }
+        _ => FillMode::All,
+    };
+    let evals = if ncols == 0 {
+        0
+    } else {
+        m.as_mut_slice()
+            .par_chunks_exact_mut(fc * ncols)
+            .enumerate()
+            .map(|(kp, block)| check.fill_block(kp, block, mode))
+            .sum()
+    };
+    (m, evals)
+}
+
+/// [`estimate`] from the check rows already filled ([`check_matrix`]):
+/// the same figures, bit for bit.
+pub fn estimate_from(
+    check: &AssemblyPlan,
+    matrix: &DenseMatrix,
+    channels: &[ChannelFields<'_>],
+) -> Vec<ErrorEstimate> {
+    let fc = check.rows().nodes_per_element();
+    let ncols = check.dim();
+    assert_eq!(
+        (matrix.nrows(), matrix.ncols()),
+        (check.rows().len(), ncols)
+    );
+    residuals(check, channels, |coeffs| {
+        matrix
+            .as_slice()
+            .par_chunks(fc * ncols.max(1))
+            .enumerate()
+            .map(|(kp, block)| contract(kp, block, fc, ncols, channels, coeffs))
+            .collect()
+    })
+}
+
+/// u_n at the check points (its coefficients in the check basis), η per
+/// element from `eta_of(coefficients)` (channel-major within each element's
+/// block), and the summaries.
+fn residuals(
+    check: &AssemblyPlan,
+    channels: &[ChannelFields<'_>],
+    eta_of: impl FnOnce(&[Vec<f64>]) -> Vec<Vec<f64>>,
+) -> Vec<ErrorEstimate> {
+    let disc = check.rows();
+    let fc = disc.nodes_per_element();
     let coeffs: Vec<Vec<f64>> = channels
         .iter()
         .map(|ch| {
@@ -140,33 +216,35 @@ pub fn estimate(check: &AssemblyPlan, channels: &[ChannelFields<'_>]) -> Vec<Err
                 .collect()
         })
         .collect();
-    // η at every check point, channel-major within each element's block:
-    // the rows are the check points, the columns u_n's own basis.
-    let eta: Vec<Vec<f64>> = (0..n)
-        .into_par_iter()
-        .map_init(
-            || vec![0.0; fc * ncols],
-            |block, kp| {
-                check.fill_block(kp, block, FillMode::All);
-                let mut out = Vec::with_capacity(channels.len() * fc);
-                for (ch, c) in channels.iter().zip(&coeffs) {
-                    let u = ch.solution.nodal();
-                    for a in 0..fc {
-                        let i = kp * fc + a;
-                        let row = &block[a * ncols..(a + 1) * ncols];
-                        let ku: f64 = row.iter().zip(u).map(|(g, u)| g * u).sum();
-                        out.push(ch.emission[i] + ch.rho[i] * ku - c[i]);
-                    }
-                }
-                out
-            },
-        )
-        .collect();
+    let eta = eta_of(&coeffs);
     channels
         .iter()
         .enumerate()
         .map(|(ci, ch)| summarise(disc, ch, &coeffs[ci], |k, a| eta[k][ci * fc + a]))
         .collect()
+}
+
+/// η at the `fc` check points of element `kp` for every channel, from its
+/// rows `block` (fc × ncols): E + ρ K u_n - u_n.
+fn contract(
+    kp: usize,
+    block: &[f64],
+    fc: usize,
+    ncols: usize,
+    channels: &[ChannelFields<'_>],
+    coeffs: &[Vec<f64>],
+) -> Vec<f64> {
+    let mut out = Vec::with_capacity(channels.len() * fc);
+    for (ch, c) in channels.iter().zip(coeffs) {
+        let u = ch.solution.nodal();
+        for a in 0..fc {
+            let i = kp * fc + a;
+            let row = &block[a * ncols..(a + 1) * ncols];
+            let ku: f64 = row.iter().zip(u).map(|(g, u)| g * u).sum();
+            out.push(ch.emission[i] + ch.rho[i] * ku - c[i]);
+        }
+    }
+    out
 }
 
 /// Norms, signs and per-element figures of one channel's η. On each

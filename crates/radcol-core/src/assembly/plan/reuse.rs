@@ -80,23 +80,46 @@ impl Unchanged {
     /// (the old mesh's N_old × N_old matrix with `f` unknowns per element)
     /// into `matrix` (the refined mesh's).
     pub fn copy_blocks(&self, previous: &DenseMatrix, matrix: &mut DenseMatrix, f: usize) {
-        let (n_new, n_old) = (self.len() * f, self.old_len() * f);
-        assert_eq!((previous.nrows(), matrix.nrows()), (n_old, n_new));
+        self.copy_blocks_of(previous, matrix, f, f);
+    }
+
+    /// [`Unchanged::copy_blocks`] for matrices with `fr` rows and `fc`
+    /// columns per element (an [`AssemblyPlan::at_points`] plan's: rows at
+    /// other points than the nodes).
+    ///
+    /// [`AssemblyPlan::at_points`]: crate::assembly::AssemblyPlan::at_points
+    pub fn copy_blocks_of(
+        &self,
+        previous: &DenseMatrix,
+        matrix: &mut DenseMatrix,
+        fr: usize,
+        fc: usize,
+    ) {
+        let (n_new, n_old) = (self.len() * fc, self.old_len() * fc);
+        assert_eq!(
+            (
+                previous.nrows(),
+                previous.ncols(),
+                matrix.nrows(),
+                matrix.ncols()
+            ),
+            (self.old_len() * fr, n_old, self.len() * fr, n_new)
+        );
         let cols: Vec<(usize, usize)> = (0..self.len())
             .filter_map(|k| self.old(k).map(|ok| (k, ok)))
             .collect();
         let old = previous.as_slice();
         matrix
             .as_mut_slice()
-            .par_chunks_exact_mut(f * n_new)
+            .par_chunks_exact_mut(fr * n_new)
             .enumerate()
             .for_each(|(kp, block)| {
                 let Some(op) = self.old(kp) else { return };
-                for a in 0..f {
-                    let src = &old[(op * f + a) * n_old..(op * f + a + 1) * n_old];
+                for a in 0..fr {
+                    let src = &old[(op * fr + a) * n_old..(op * fr + a + 1) * n_old];
                     let dst = &mut block[a * n_new..(a + 1) * n_new];
                     for &(k, ok) in &cols {
-                        dst[k * f..(k + 1) * f].copy_from_slice(&src[ok * f..(ok + 1) * f]);
+                        dst[k * fc..(k + 1) * fc].copy_from_slice(&src[ok * fc..(ok + 1) * fc]);
                     }
                 }
             });

@@ -195,6 +195,7 @@ pub fn solve_adaptive(
             backend,
             guess.as_deref(),
             prev.as_ref(),
+            true,
         )?;
         drop(prev);
         // The previous solve has served: its matrix goes before the next one.
