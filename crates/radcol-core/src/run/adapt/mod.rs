@@ -11,7 +11,10 @@
 //! at the new nodes, and takes the classes, occluder candidates and matrix
 //! entries of pairs of unchanged elements from the previous solve
 //! ([`AssemblyPlan::updating`](crate::assembly::AssemblyPlan::updating)):
-//! only the rows and columns of new elements are integrated.
+//! only the rows and columns of new elements are integrated, and the
+//! estimate's check rows likewise where they fit in memory. Elements whose
+//! estimate stops falling under refinement are no longer split
+//! (`history.rs`); the loop then names where they are.
 
 mod history;
 
@@ -55,8 +58,9 @@ pub struct AdaptOptions {
     /// An element whose estimate stayed above [`STALL_RATIO`] of its
     /// parent's for this many splits in a row is not split again (0: only
     /// the depth limit applies). At such points the depth limit alone costs
-    /// a solve per wasted generation (on the Cornell box from its 50
-    /// triangles, the last 7 of 14 steps).
+    /// a solve per wasted generation (the Cornell box from its 50 triangles
+    /// to 1e-3: 12 steps and 14 973 unknowns with the depth limit alone, 9
+    /// steps and 7 710 unknowns with 3 stalled generations).
     pub stall_generations: u32,
 }
 
