@@ -122,7 +122,8 @@ pub struct ProblemArgs {
     #[arg(long, value_name = "N", default_value_t = 2000)]
     pub max_iters: usize,
 
-    /// Target relative error of each element integral, in (0, 1).
+    /// Target relative error of each element integral, in [1e-15, 1) (f64 cannot deliver
+    /// less).
     #[arg(long, value_name = "Q", default_value = "1e-12")]
     pub quad_tol: f64,
 

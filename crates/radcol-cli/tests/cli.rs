@@ -517,6 +517,13 @@ fn bad_input_gives_one_line_and_exit_code_two() {
     assert_one_line_error(&["solve", "sphere", "--degree", "7"], 2, &["0..=6"]);
     assert_one_line_error(&["solve", "sphere", "--alpha", "0.4"], 2, &["1/3"]);
     assert_one_line_error(&["solve", "sphere", "--tol", "0"], 2, &["--tol"]);
+    // A quadrature tolerance f64 cannot deliver hung the assembly (no answer
+    // after 300 s at 1e-300): refused before any work.
+    assert_one_line_error(
+        &["solve", "sphere", "--quad-tol", "1e-300"],
+        2,
+        &["--quad-tol", "1e-300", "1e-15"],
+    );
     assert_one_line_error(
         &["solve", "sphere", "--no-such-flag"],
         2,

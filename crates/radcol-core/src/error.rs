@@ -72,6 +72,14 @@ pub enum InputError {
         /// The length asked for.
         value: f64,
     },
+    /// A quadrature tolerance that f64 cannot deliver (or outside (0, 1)).
+    #[error("quadrature tolerance {value}: must lie in [{min:e}, 1); f64 sums carry a rounding error of about 1e-16, so a smaller tolerance only makes the adaptive rules subdivide without end")]
+    QuadratureTolerance {
+        /// The tolerance asked for.
+        value: f64,
+        /// The smallest accepted.
+        min: f64,
+    },
     /// A target error outside (0, 1).
     #[error("target error {value} must lie in (0, 1): it is the max error relative to max |u|")]
     TargetError {

@@ -14,7 +14,7 @@ use crate::error::{bad_input, BadInput};
 use crate::scene::SceneSpec;
 use anyhow::{Context, Result};
 use outputs::{error_map, look, output, svg_file};
-use radcol_core::assembly::{QuadratureOptions, VisibilityMode};
+use radcol_core::assembly::{QuadratureOptions, VisibilityMode, MIN_QUAD_TOL};
 use radcol_core::nodes::{check_alpha, check_degree};
 use radcol_core::problem::Field;
 use radcol_core::run::adapt::AdaptOptions;
@@ -333,6 +333,12 @@ fn problem(p: &ProblemArgs) -> Result<ProblemSpec> {
     let alpha = parse_alpha(&p.alpha)?;
     let tol = open_unit("--tol", p.tol)?;
     let quad_tol = open_unit("--quad-tol", p.quad_tol)?;
+    if quad_tol < MIN_QUAD_TOL {
+        return Err(bad_input(format!(
+            "--quad-tol {quad_tol:e}: below {MIN_QUAD_TOL:e} no f64 quadrature can deliver it (sums carry about 1e-16 of rounding) and the adaptive rules would subdivide without end; give a value in [{MIN_QUAD_TOL:e}, 1)"
+        ))
+        .into());
+    }
     if p.restart == 0 {
         return Err(bad_input("--restart must be at least 1").into());
     }

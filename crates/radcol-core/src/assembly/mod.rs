@@ -16,7 +16,9 @@ pub mod integrate;
 pub mod plan;
 
 pub use cpu::CpuBackend;
-pub use integrate::{ElementIntegrator, FieldPoint, QuadratureOptions, VisibilityMode};
+pub use integrate::{
+    ElementIntegrator, FieldPoint, QuadratureOptions, VisibilityMode, MIN_QUAD_TOL,
+};
 pub use plan::{AssemblyPlan, FarTable, FillMode, PairClass, PlanStats, Unchanged};
 
 pub use crate::backend::{BackendKind, Scalar};

@@ -2,8 +2,8 @@
 
 use super::size::{available_memory, mesh_size, MemoryEstimate};
 use super::{ChannelResult, SolveConfig, SolveOutcome, SolverKind, SolverReport, Timings};
-use crate::assembly::QuadratureOptions;
 use crate::assembly::{Assembled, AssemblyBackend, AssemblyPlan, Unchanged};
+use crate::assembly::{QuadratureOptions, MIN_QUAD_TOL};
 use crate::discretization::Discretization;
 use crate::error::{Error, InputError};
 use crate::estimate::{
@@ -40,6 +40,7 @@ pub fn check_size(problem: &Problem, cfg: &SolveConfig) -> Result<u64, InputErro
 /// Builds the mesh and collocation points for `cfg`, refusing sizes that do
 /// not fit in memory ([`check_size`]) before building anything.
 pub fn discretize(problem: &Problem, cfg: &SolveConfig) -> Result<Arc<Discretization>, Error> {
+    check_quadrature(cfg)?;
     let nodes = NodeSet::new(cfg.degree, cfg.alpha)?;
     check_size(problem, cfg)?;
     let surface = &problem.surface;
@@ -48,6 +49,18 @@ pub fn discretize(problem: &Problem, cfg: &SolveConfig) -> Result<Arc<Discretiza
         None => Mesh::new(surface.clone(), cfg.level),
     });
     Ok(Arc::new(Discretization::new(mesh, nodes)))
+}
+
+/// Refuses a quadrature tolerance outside [MIN_QUAD_TOL, 1).
+fn check_quadrature(cfg: &SolveConfig) -> Result<(), InputError> {
+    let tol = cfg.quad.tol;
+    if !(MIN_QUAD_TOL..1.0).contains(&tol) {
+        return Err(InputError::QuadratureTolerance {
+            value: tol,
+            min: MIN_QUAD_TOL,
+        });
+    }
+    Ok(())
 }
 
 /// Evaluates `field` at every collocation point, rejecting non-finite values.
@@ -322,6 +335,7 @@ pub(crate) fn solve_step(
     keep_check: bool,
 ) -> Result<(SolveOutcome, Plans), Error> {
     let t0 = Instant::now();
+    check_quadrature(cfg)?;
     let visibility = visibility::analyze(&problem.surface);
     visibility.check_supported()?;
     let nodes = NodeSet::new(cfg.degree, cfg.alpha)?;
