@@ -73,7 +73,7 @@ pub enum InputError {
         value: f64,
     },
     /// A quadrature tolerance that f64 cannot deliver (or outside (0, 1)).
-    #[error("quadrature tolerance {value}: must lie in [{min:e}, 1); f64 sums carry a rounding error of about 1e-16, so a smaller tolerance only makes the adaptive rules subdivide without end")]
+    #[error("quadrature tolerance {value}: must lie in [{min:e}, 1); f64 sums carry a rounding error of about 1e-16, so a smaller tolerance only makes the adaptive rules subdivide every near pair to their depth limit")]
     QuadratureTolerance {
         /// The tolerance asked for.
         value: f64,

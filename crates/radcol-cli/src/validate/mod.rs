@@ -335,7 +335,7 @@ fn problem(p: &ProblemArgs) -> Result<ProblemSpec> {
     let quad_tol = open_unit("--quad-tol", p.quad_tol)?;
     if quad_tol < MIN_QUAD_TOL {
         return Err(bad_input(format!(
-            "--quad-tol {quad_tol:e}: below {MIN_QUAD_TOL:e} no f64 quadrature can deliver it (sums carry about 1e-16 of rounding) and the adaptive rules would subdivide without end; give a value in [{MIN_QUAD_TOL:e}, 1)"
+            "--quad-tol {quad_tol:e}: below {MIN_QUAD_TOL:e} no f64 quadrature can deliver it (sums carry about 1e-16 of rounding) and the adaptive rules would subdivide every near pair to their depth limit; give a value in [{MIN_QUAD_TOL:e}, 1)"
         ))
         .into());
     }

@@ -39,7 +39,8 @@ pub enum VisibilityMode {
 /// The smallest element-integral tolerance a solve accepts: f64 sums carry
 /// about 1e-16 of rounding, and below that the adaptive rules subdivide to
 /// their depth limit for nothing (the sphere at level 1: 0.05 s of assembly
-/// at 1e-15, 2.7 s at 1e-40, no answer after 300 s at 1e-300).
+/// at 1e-15, 2.7 s at 1e-40; issue 12 reports no answer after 300 s at
+/// 1e-300).
 pub const MIN_QUAD_TOL: f64 = 1e-15;
 
 /// Accuracy settings for element integrals.
