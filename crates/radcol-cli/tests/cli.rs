@@ -21,6 +21,17 @@ fn radcol(args: &[&str]) -> Output {
         .expect("radcol runs")
 }
 
+/// `radcol args`, which must succeed (stderr shown when it does not).
+fn radcol_ok(args: &[&str]) -> Output {
+    let out = radcol(args);
+    assert!(
+        out.status.success(),
+        "radcol {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 fn stdout_json(out: &Output) -> Value {
     assert!(
         out.status.success(),
@@ -150,12 +161,7 @@ fn solve_writes_csv_and_refuses_to_overwrite() {
     let dir = scratch("csv");
     let path = dir.join("u.csv");
     let p = path.to_str().unwrap();
-    let out = radcol(&["solve", "sphere", "--level", "1", "--out", p]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    radcol_ok(&["solve", "sphere", "--level", "1", "--out", p]);
     let text = std::fs::read_to_string(&path).unwrap();
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("element,node,x,y,z,u,u_error_estimate"));
@@ -195,17 +201,12 @@ fn solve_writes_csv_and_refuses_to_overwrite() {
         "refused write must not touch the file"
     );
 
-    let out = radcol(&["solve", "sphere", "--level", "0", "--out", p, "--force"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    radcol_ok(&["solve", "sphere", "--level", "0", "--out", p, "--force"]);
     assert_eq!(
         std::fs::read_to_string(&path).unwrap().lines().count(),
         1 + 24
     );
-    let out = radcol(&[
+    radcol_ok(&[
         "solve",
         "sphere",
         "-l",
@@ -215,7 +216,6 @@ fn solve_writes_csv_and_refuses_to_overwrite() {
         p,
         "--force",
     ]);
-    assert!(out.status.success());
     let text = std::fs::read_to_string(&path).unwrap();
     assert_eq!(text.lines().next(), Some("element,node,x,y,z,u"));
 
@@ -313,14 +313,9 @@ fn study_json_has_rows_with_eoc_and_fitted_orders() {
 
 #[test]
 fn study_text_prints_table_and_theory() {
-    let out = radcol(&[
+    let out = radcol_ok(&[
         "study", "sphere", "--degree", "0", "--levels", "0..=1", "--exact", "1+z",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
         text.contains("eoc_nodes") && text.contains("fitted orders"),
@@ -438,15 +433,13 @@ fn info_reports_mesh_and_memory() {
         v["contents"].is_null(),
         "an analytic surface has no materials"
     );
-    let out = radcol(&["info", "sphere"]);
-    assert!(out.status.success());
+    let out = radcol_ok(&["info", "sphere"]);
     assert!(String::from_utf8_lossy(&out.stdout).contains("no visibility tests"));
 }
 
 #[test]
 fn help_documents_defaults() {
-    let out = radcol(&["solve", "--help"]);
-    assert!(out.status.success());
+    let out = radcol_ok(&["solve", "--help"]);
     let help = String::from_utf8_lossy(&out.stdout);
     for d in [
         "[default: 1]",
@@ -758,7 +751,7 @@ fn vertex_files_carry_the_solution() {
     let dir = scratch("vertex");
     let ply = dir.join("s.ply");
     let glb = dir.join("s.glb");
-    let out = radcol(&[
+    radcol_ok(&[
         "solve",
         "sphere",
         "--level",
@@ -774,11 +767,6 @@ fn vertex_files_carry_the_solution() {
         "--out",
         glb.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let vertices = read_ply(ply.to_str().unwrap());
     // 32 elements, 10 vertices each for 3 × 3 sub-triangles.
     assert_eq!(vertices.len(), 32 * 10);
@@ -1114,7 +1102,7 @@ fn study_compares_degrees_and_names_the_fastest_per_decade() {
 fn error_map_shows_the_estimate() {
     let dir = scratch("error_map");
     let map = dir.join("err.png");
-    let out = radcol(&[
+    radcol_ok(&[
         "solve",
         "shadow",
         "--level",
@@ -1126,11 +1114,6 @@ fn error_map_shows_the_estimate() {
         "--error-map",
         map.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&map).unwrap()));
     let mut reader = decoder.read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size().unwrap()];
