@@ -6,8 +6,15 @@ use std::path::PathBuf;
 
 const SCENES: &str = "sphere (unit sphere), sphere:R, ellipsoid:A,B,C, box:LX,LY,LZ \
 (the room [0,LX]x[0,LY]x[0,LZ]); the built-in triangle scenes cornell (the Cornell box), \
-room (an empty lit room), shadow (a floor under a light and a floating occluder) and plates (two facing squares); or FILE.obj with its MTL materials \
+room (an empty lit room), lroom (an L-shaped room lit in one leg), shadow (a floor under a light and a floating occluder) and plates (two facing squares); or FILE.obj with its MTL materials \
 (Kd = reflectance ρ, Ke = emission E, per colour channel R, G, B)";
+
+const EXPRESSIONS: &str =
+    "Expressions (--rho, --emission, --exact): numbers (2, 0.5, 1e-3), x, y, z, \
+pi, + - * / and ^ (or **), parentheses, and sin cos tan asin acos atan sinh cosh tanh exp \
+log (natural; also ln) log10 sqrt abs. Precedence is the one on paper: ^ binds tighter than a \
+sign and groups to the right, so -z^2 = -(z^2), 2^3^2 = 2^9 and 2^-1 = 0.5; * and / bind \
+tighter than + and -, and both group to the left (8/4/2 = 1). Write 2*x, not 2x.";
 
 /// Collocation for the radiosity equation u - (ρ/π) ∫ G u = E on curved and
 /// polyhedral surfaces (Atkinson-Chien collocation with Micula's α0 nodes).
@@ -23,8 +30,10 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Solve on one refinement level and report mesh, assembly, timings, solution integrals and errors.
+    #[command(after_help = EXPRESSIONS)]
     Solve(SolveArgs),
     /// Solve on levels A..=B against an exact u and report errors with their convergence orders.
+    #[command(after_help = EXPRESSIONS)]
     Study(StudyArgs),
     /// Print the collocation nodes and weights of degree r on the unit triangle, and α0.
     Nodes(NodesArgs),
