@@ -285,6 +285,12 @@ fn summarise(
     let mut negative = vec![false; mesh.len()];
     let (mut max, mut l2sq, mut scale) = (0.0f64, 0.0, 0.0f64);
     let (mut min_value, mut negative_points) = (f64::INFINITY, 0);
+    // Squares are summed in units of max |u_n| so that they neither
+    // overflow (u ~ 1e160) nor underflow (u ~ 1e-160).
+    let unit = match nodal.iter().fold(0.0f64, |m, u| m.max(u.abs())) {
+        m if m > 0.0 => m,
+        _ => 1.0,
+    };
     for (k, (elem, neg)) in elements.iter_mut().zip(&mut negative).enumerate() {
         let mut e_max = 0.0f64;
         let mut most_negative = 0.0f64;
@@ -300,7 +306,7 @@ fn summarise(
         }
         for (&st, &w) in rule.points.iter().zip(&rule.weights) {
             let (e, _) = interp(k, st);
-            l2sq += w * mesh.point(k, st[0], st[1]).jacobian * e * e;
+            l2sq += w * mesh.point(k, st[0], st[1]).jacobian * (e / unit) * (e / unit);
         }
         max = max.max(e_max);
         *neg = nonneg && most_negative > 0.0;
@@ -318,10 +324,10 @@ fn summarise(
     let s = if scale > 0.0 { scale } else { 1.0 };
     ErrorEstimate {
         max,
-        l2: l2sq.sqrt(),
+        l2: l2sq.sqrt() * unit,
         scale,
         max_rel: max / s,
-        rms_rel: (l2sq / area).sqrt() / s,
+        rms_rel: (l2sq / area).sqrt() * unit / s,
         negative_nodes: nodal.iter().filter(|&&u| u < 0.0).count(),
         negative_points,
         min_value,

@@ -40,6 +40,12 @@ pub struct SolverReport {
     pub iterations: usize,
     /// True relative residual ‖b - A x‖ / ‖b‖.
     pub residual: f64,
+    /// GMRES's ‖A‖ ‖x‖ / ‖b‖, a lower bound of the condition number
+    /// ([`crate::solve::GmresInfo::growth`]); None for LU.
+    pub growth: Option<f64>,
+    /// GMRES stopped at the rounding floor of the system, above `--tol`
+    /// ([`crate::solve::ROUNDING_FLOOR`]).
+    pub at_rounding_floor: bool,
 }
 
 /// One channel's result.

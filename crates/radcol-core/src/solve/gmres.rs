@@ -14,7 +14,7 @@
 //! free. Only the operator apply is parallel: for `n <= ~30000` the `O(n^2)`
 //! mat-vec dominates the `O(n m)` vector work.
 
-use super::{all_finite, LinearOperator, SolveError};
+use super::{all_finite, max_abs, unscale, LinearOperator, SolveError};
 use crate::matrix::dot;
 
 /// Options for [`gmres`].
@@ -49,7 +49,24 @@ pub struct GmresInfo {
     /// True relative residual `||b - A x|| / ||b||` of the returned `x`,
     /// recomputed with one extra operator apply (not the Arnoldi estimate).
     pub residual: f64,
+    /// `||A|| ||x|| / ||b||`, with `||A||` the largest `||A v||` seen on the
+    /// unit Krylov vectors: a lower bound of the condition number, and the
+    /// factor by which rounding in `b - A x` exceeds `ε ||b||`.
+    pub growth: f64,
+    /// True when `rel_tol` was below what f64 can deliver for this system and
+    /// the iteration stopped at the rounding floor instead
+    /// ([`ROUNDING_FLOOR`] `ε (||A|| ||x|| + ||b||)`, a backward error of a
+    /// few dozen ulps).
+    pub at_rounding_floor: bool,
 }
+
+/// The residual `b - A x` cannot be computed more accurately than about
+/// `ε ||A|| ||x||`: when `||x|| ≫ ||b||` (ρ → 1 in a closed room, where
+/// `||x|| / ||b|| ≈ 1/(1 - ρ)`), a tolerance relative to `||b||` alone is out
+/// of reach and restarted GMRES stagnates there (box room at ρ = 0.99999: true
+/// residual 1.5e-11 against `--tol` 1e-12 after 2000 iterations). A residual
+/// below this many ulps of `||A|| ||x|| + ||b||` counts as converged.
+pub const ROUNDING_FLOOR: f64 = 64.0;
 
 /// Restarted GMRES(m) with modified Gram–Schmidt (plus one
 /// reorthogonalisation pass) and Givens rotations.
@@ -58,16 +75,22 @@ pub struct GmresInfo {
 /// [`SolveError::NotConverged`], where it is the best iterate found).
 /// `b = 0` gives `x = 0` with 0 iterations.
 ///
+/// The iteration runs on `b / s` and `x / s`, `s = max |b_i|`, so that any
+/// representable `b` (1e-300 or 1e300) gives the same relative answer; the
+/// solution is multiplied back at the end.
+///
 /// Convergence is declared only on the *true* residual `||b - A x||`,
-/// recomputed at the start of every cycle, so `Ok(info)` guarantees
-/// `info.residual <= params.rel_tol`.
+/// recomputed at the start of every cycle: `Ok(info)` guarantees
+/// `info.residual <= params.rel_tol`, or `info.at_rounding_floor` (see
+/// [`ROUNDING_FLOOR`]).
 ///
 /// # Errors
 /// * [`SolveError::DimensionMismatch`] if `b` or `x` is not of length `op.dim()`;
 /// * [`SolveError::NonFinite`] if `b`, the initial `x` or an operator output
 ///   contains NaN or infinity;
 /// * [`SolveError::NotConverged`] if `params.max_iters` iterations did not
-///   reach `params.rel_tol` (with the true relative residual of `x`).
+///   reach `params.rel_tol` (with the true relative residual of `x`);
+/// * [`SolveError::Overflow`] if the solution is beyond the largest f64.
 pub fn gmres(
     op: &dyn LinearOperator,
     b: &[f64],
@@ -86,15 +109,33 @@ pub fn gmres(
     if !all_finite(b) || !all_finite(x) {
         return Err(SolveError::NonFinite);
     }
-    let b_norm = dot(b, b).sqrt();
-    if b_norm == 0.0 {
+    let scale = max_abs(b);
+    if scale == 0.0 {
         x.fill(0.0);
         return Ok(GmresInfo {
             iterations: 0,
             restarts: 0,
             residual: 0.0,
+            growth: 0.0,
+            at_rounding_floor: false,
         });
     }
+    let b: Vec<f64> = b.iter().map(|v| v / scale).collect();
+    x.iter_mut().for_each(|v| *v /= scale);
+    let info = cycles(op, &b, x, params);
+    unscale(x, scale)?;
+    info
+}
+
+/// GMRES(m) cycles on a right-hand side of order 1 (`max |b_i| = 1`).
+fn cycles(
+    op: &dyn LinearOperator,
+    b: &[f64],
+    x: &mut [f64],
+    params: &GmresParams,
+) -> Result<GmresInfo, SolveError> {
+    let n = op.dim();
+    let b_norm = dot(b, b).sqrt();
     let tol = params.rel_tol * b_norm;
     let m = params.restart.clamp(1, n);
 
@@ -111,13 +152,19 @@ pub fn gmres(
 
     let mut iterations = 0usize;
     let mut cycles = 0usize;
+    // The largest ||A v|| over unit Krylov vectors v: a lower bound of ||A||.
+    let mut a_norm = 0.0f64;
     loop {
         let beta = residual(op, b, x, &mut r)?;
-        if beta <= tol {
+        let x_norm = dot(x, x).sqrt();
+        let floor = ROUNDING_FLOOR * f64::EPSILON * (a_norm * x_norm + b_norm);
+        if beta <= tol || beta <= floor {
             return Ok(GmresInfo {
                 iterations,
                 restarts: cycles.saturating_sub(1),
                 residual: beta / b_norm,
+                growth: a_norm * x_norm / b_norm,
+                at_rounding_floor: beta > tol,
             });
         }
         if iterations >= params.max_iters {
@@ -148,6 +195,7 @@ pub fn gmres(
             if !all_finite(w) {
                 return Err(SolveError::NonFinite);
             }
+            a_norm = a_norm.max(dot(w, w).sqrt());
             let col = &mut h[j * ld..(j + 1) * ld];
             let h_next = orthogonalise(done, w, col, j);
             if !rotate(col, &mut cs, &mut sn, &mut g, j) {
@@ -157,7 +205,7 @@ pub fn gmres(
             }
             k = j + 1;
 
-            if g[j + 1].abs() <= tol || h_next == 0.0 {
+            if g[j + 1].abs() <= tol.max(floor) || h_next == 0.0 {
                 break;
             }
         }
@@ -492,5 +540,86 @@ mod tests {
             gmres(&Bad, &[1.0; 4], &mut x, &GmresParams::default()),
             Err(SolveError::NonFinite)
         ));
+    }
+
+    /// `I - ρ P` with P row-stochastic (a closed room's G): the constant
+    /// vector is an eigenvector with eigenvalue 1 - ρ.
+    fn closed_room(n: usize, rho: f64) -> DenseMatrix {
+        let mut rng = Lcg(11);
+        let mut a = vec![0.0; n * n];
+        for i in 0..n {
+            let row: Vec<f64> = (0..n).map(|_| rng.next_f64()).collect();
+            let sum: f64 = row.iter().sum();
+            for j in 0..n {
+                a[i * n + j] = -rho * row[j] / sum;
+            }
+            a[i * n + i] += 1.0;
+        }
+        DenseMatrix::from_row_major(n, n, a)
+    }
+
+    #[test]
+    fn tiny_and_huge_right_hand_sides_give_the_same_relative_answer() {
+        let n = 50;
+        let a = well_conditioned(n, 5);
+        let b1 = ref_matvec(&a, &x_true(n));
+        let mut x1 = vec![0.0; n];
+        gmres(&a, &b1, &mut x1, &GmresParams::default()).unwrap();
+        for scale in [1e-300, 1e-160, 1e160, 1e300] {
+            let b: Vec<f64> = b1.iter().map(|v| v * scale).collect();
+            let mut x = vec![0.0; n];
+            let info = gmres(&a, &b, &mut x, &GmresParams::default()).unwrap();
+            assert!(info.residual <= 1e-12, "{scale}: {info:?}");
+            let back: Vec<f64> = x.iter().map(|v| v / scale).collect();
+            assert!(
+                rel_diff(&back, &x1) < 1e-13,
+                "{scale}: {}",
+                rel_diff(&back, &x1)
+            );
+        }
+        // The solution of I - 0.5 P for b = 1e308 is 2e308: beyond f64.
+        let a = closed_room(n, 0.5);
+        let mut x = vec![0.0; n];
+        let e = gmres(&a, &[1e308; 50], &mut x, &GmresParams::default()).unwrap_err();
+        assert!(
+            matches!(e, SolveError::Overflow { largest, scale } if (largest - 2.0).abs() < 1e-9 && scale == 1e308),
+            "{e:?}"
+        );
+    }
+
+    #[test]
+    fn near_singular_closed_rooms_stop_at_the_rounding_floor() {
+        // At ρ = 0.999999 the residual cannot be computed below about
+        // ε ||A|| ||x|| = ε 1e6 ||b|| > 1e-12 ||b||: GMRES used to stagnate
+        // there until max_iters and report "not converged".
+        let n = 200;
+        for rho in [0.9, 0.9999, 0.999999] {
+            let a = closed_room(n, rho);
+            let b: Vec<f64> = (0..n).map(|i| 1.0 + 0.5 * (i as f64).sin()).collect();
+            let mut x = vec![0.0; n];
+            let info = gmres(&a, &b, &mut x, &GmresParams::default()).unwrap();
+            assert!(info.iterations < 100, "{rho}: {info:?}");
+            assert!(rho < 0.9999 || info.at_rounding_floor, "{rho}: {info:?}");
+            let kappa = 1.0 / (1.0 - rho);
+            // ‖A‖‖x‖/‖b‖ is at least ~1/(1 - ρ) · (mean of b / rms of b).
+            assert!(
+                info.growth > 0.5 * kappa && info.growth < 4.0 * kappa,
+                "{rho}: {info:?}"
+            );
+            assert_eq!(info.at_rounding_floor, info.residual > 1e-12, "{info:?}");
+            // The tolerance met, or a backward error of a few dozen ulps;
+            // the forward error within κ of it.
+            let r = ref_rel_residual(&a, &x, &b);
+            let floor = ROUNDING_FLOOR * f64::EPSILON * (info.growth + 1.0);
+            assert!(r <= 1.01 * floor.max(1e-12), "{rho}: {r}");
+            let lu = crate::solve::DenseLu::factor(&a).unwrap();
+            let mut y = b.clone();
+            lu.solve_in_place(&mut y).unwrap();
+            assert!(
+                rel_diff(&x, &y) < 1e-12 * kappa,
+                "{rho}: {}",
+                rel_diff(&x, &y)
+            );
+        }
     }
 }

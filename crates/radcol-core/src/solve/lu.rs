@@ -13,7 +13,7 @@
 //! (the high-level type stores separate L and U copies: 2× the memory, which
 //! matters at n ≈ 30000, 7.2 GB per matrix).
 
-use super::{all_finite, SolveError};
+use super::{all_finite, max_abs, unscale, SolveError};
 use crate::matrix::DenseMatrix;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
@@ -129,7 +129,8 @@ impl DenseLu {
     /// * [`SolveError::DimensionMismatch`] if `b.len() != self.dim()`;
     /// * [`SolveError::NonFinite`] if `b` contains NaN or infinity;
     /// * [`SolveError::Singular`] if the solution is not finite (overflow on a
-    ///   tiny pivot; `pivot` is the index of the smallest `|U_ii|`).
+    ///   tiny pivot; `pivot` is the index of the smallest `|U_ii|`);
+    /// * [`SolveError::Overflow`] if the solution is beyond the largest f64.
     pub fn solve_in_place(&self, b: &mut [f64]) -> Result<(), SolveError> {
         let n = self.dim();
         if b.len() != n {
@@ -141,6 +142,14 @@ impl DenseLu {
         if !all_finite(b) {
             return Err(SolveError::NonFinite);
         }
+        // Solved for b / max|b_i| and scaled back, so that tiny or huge
+        // right-hand sides neither underflow into subnormals nor overflow
+        // on the way.
+        let scale = max_abs(b);
+        if scale == 0.0 {
+            return Ok(());
+        }
+        b.iter_mut().for_each(|v| *v /= scale);
         let rhs = MatMut::from_column_major_slice_mut(b, n, 1);
         solve::solve_in_place(
             self.lu.as_ref(),
@@ -158,7 +167,7 @@ impl DenseLu {
                 pivot: self.min_pivot,
             });
         }
-        Ok(())
+        unscale(b, scale)
     }
 
     /// Dimension `n` of the factored `n × n` matrix.
@@ -202,6 +211,33 @@ mod tests {
             lu.solve_in_place(&mut x).unwrap();
             assert!(rel_diff(&x, &xt) < 1e-10, "channel {c}");
         }
+    }
+
+    #[test]
+    fn tiny_and_huge_right_hand_sides_give_the_same_relative_answer() {
+        let n = 40;
+        let a = well_conditioned(n, 4);
+        let lu = DenseLu::factor(&a).unwrap();
+        let xt = x_true(n);
+        let b = ref_matvec(&a, &xt);
+        // 1e-320 is subnormal: without scaling its digits are lost.
+        for scale in [1e-320, 1e-300, 1e300] {
+            let mut x: Vec<f64> = b.iter().map(|v| v * scale).collect();
+            lu.solve_in_place(&mut x).unwrap();
+            let back: Vec<f64> = x.iter().map(|v| v / scale).collect();
+            let tol = if scale < 1e-310 { 1e-3 } else { 1e-13 };
+            assert!(
+                rel_diff(&back, &xt) < tol,
+                "{scale}: {}",
+                rel_diff(&back, &xt)
+            );
+        }
+        let half = DenseMatrix::from_row_major(1, 1, vec![0.5]);
+        let mut x = vec![1e308];
+        assert!(matches!(
+            DenseLu::factor(&half).unwrap().solve_in_place(&mut x),
+            Err(SolveError::Overflow { .. })
+        ));
     }
 
     #[test]

@@ -13,7 +13,7 @@
 mod gmres;
 mod lu;
 
-pub use gmres::{gmres, GmresInfo, GmresParams};
+pub use gmres::{gmres, GmresInfo, GmresParams, ROUNDING_FLOOR};
 pub use lu::DenseLu;
 
 use crate::matrix::{dot, DenseMatrix};
@@ -162,10 +162,41 @@ pub enum SolveError {
     /// output contained NaN or infinity.
     #[error("input or operator output contains NaN or infinity")]
     NonFinite,
+    /// The solution is larger than the largest f64, although the system
+    /// was solved (on a right-hand side scaled to 1).
+    #[error(
+        "the solution overflows double precision: its largest value is {largest:e} times the largest right-hand side value {scale:e}; scale the right-hand side (emission) down, the solution scales with it"
+    )]
+    Overflow {
+        /// Largest |x_i| of the solution for the scaled right-hand side.
+        largest: f64,
+        /// The scale, max |b_i|.
+        scale: f64,
+    },
 }
 
 fn all_finite(v: &[f64]) -> bool {
     v.iter().all(|x| x.is_finite())
+}
+
+/// Largest |v_i| (0 for an empty vector).
+fn max_abs(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |m, x| m.max(x.abs()))
+}
+
+/// Multiplies a solution found for a right-hand side divided by `scale`
+/// back by `scale`.
+///
+/// # Errors
+/// [`SolveError::Overflow`] when the product is beyond the largest f64.
+fn unscale(x: &mut [f64], scale: f64) -> Result<(), SolveError> {
+    let largest = max_abs(x);
+    x.iter_mut().for_each(|v| *v *= scale);
+    if all_finite(x) {
+        Ok(())
+    } else {
+        Err(SolveError::Overflow { largest, scale })
+    }
 }
 
 #[cfg(test)]
