@@ -80,6 +80,16 @@ pub enum InputError {
         /// The smallest accepted.
         min: f64,
     },
+    /// A scene too small or too large for the kernel's f64 arithmetic.
+    #[error("the scene is {extent:e} across (bounding-box diagonal): radcol works with scenes between {min:e} and {max:e} across, where the kernel's fourth powers of distances stay within double precision; the answer does not depend on the unit of length, so rescale the coordinates")]
+    SceneExtent {
+        /// The bounding box's diagonal.
+        extent: f64,
+        /// Smallest accepted.
+        min: f64,
+        /// Largest accepted.
+        max: f64,
+    },
     /// A target error outside (0, 1).
     #[error("target error {value} must lie in (0, 1): it is the max error relative to max |u|")]
     TargetError {

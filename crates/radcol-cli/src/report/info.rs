@@ -1,7 +1,7 @@
 //! `radcol info`: a scene's mesh at a level, its size, visibility, contents
 //! and an assembly time estimate.
 
-use super::secs;
+use super::{precise, secs};
 use radcol_core::run::MemoryEstimate;
 use serde::Serialize;
 use std::fmt;
@@ -177,7 +177,7 @@ impl fmt::Display for InfoReport {
             "  shape ratio     {:.4} .. {:.4}{at}",
             i.shape_ratio.min, i.shape_ratio.max
         )?;
-        writeln!(w, "  area            {:.12}{at}", i.area)?;
+        writeln!(w, "  area            {}{at}", precise(i.area))?;
         writeln!(w, "  unknowns        {} at r = {}", i.unknowns, i.degree)?;
         let avail = i
             .memory

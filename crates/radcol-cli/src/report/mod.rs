@@ -43,6 +43,16 @@ fn sci(v: f64) -> String {
     format!("{v:.3e}")
 }
 
+/// 13 significant digits: fixed-point for everyday magnitudes, scientific
+/// beyond them (an integral of 1e300 is not 300 digits long).
+fn precise(v: f64) -> String {
+    if v == 0.0 || (1e-3..1e12).contains(&v.abs()) {
+        format!("{v:.12}")
+    } else {
+        format!("{v:.12e}")
+    }
+}
+
 /// Seconds with a sensible number of digits.
 fn secs(v: f64) -> String {
     if v >= 100.0 {

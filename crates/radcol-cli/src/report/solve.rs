@@ -1,7 +1,7 @@
 //! `radcol solve`: mesh, problem, visibility, backend, assembly, timings and
 //! per-channel results.
 
-use super::{alpha_text, sci, secs, AdaptReport, ProblemText};
+use super::{alpha_text, precise, sci, secs, AdaptReport, ProblemText};
 use crate::setup::Setup;
 use radcol_core::assembly::{BackendInfo, VisibilityMode};
 use radcol_core::estimate::ErrorEstimate;
@@ -245,7 +245,7 @@ impl SolveReport {
         for ch in &self.channels {
             writeln!(
                 f,
-                "  channel {:<4}{}: {} iteration{}, relative residual {}",
+                "  channel {:<4}{}: {} iteration{}, relative residual {}{}",
                 ch.name,
                 match ch.solver.kind {
                     SolverKind::Gmres => "gmres",
@@ -253,12 +253,21 @@ impl SolveReport {
                 },
                 ch.solver.iterations,
                 if ch.solver.iterations == 1 { "" } else { "s" },
-                sci(ch.solver.residual)
+                sci(ch.solver.residual),
+                match ch.solver.growth {
+                    Some(g) if ch.solver.at_rounding_floor => format!(
+                        " (the rounding floor: ‖A‖‖u‖/‖E‖ = {}, condition at least that)",
+                        sci(g)
+                    ),
+                    Some(g) => format!(", ‖A‖‖u‖/‖E‖ = {}", sci(g)),
+                    None => String::new(),
+                }
             )?;
             writeln!(
                 f,
-                "              ∫u = {:.12}, ∫E = {:.12}",
-                ch.integral_u, ch.integral_e
+                "              ∫u = {}, ∫E = {}",
+                precise(ch.integral_u),
+                precise(ch.integral_e)
             )?;
             match &ch.errors {
                 Some(e) => writeln!(
@@ -438,6 +447,17 @@ fn solve_warnings(s: &crate::setup::Setup, out: &radcol_core::run::SolveOutcome)
                 ch.name,
                 sci(ch.solver.residual),
                 sci(tol)
+            ));
+        }
+        // The quadrature error of the matrix reaches u amplified by up to the
+        // condition number (box room: 1/(1 - ρ)).
+        if let Some(g) = ch.solver.growth.filter(|&g| g * s.cfg.quad.tol > 1e-6) {
+            w.push(format!(
+                "channel {}: the system's condition number is at least {} (ρ close to 1 in a closed scene?): \
+                 quadrature errors of --quad-tol {} may reach u amplified that much; tighten --quad-tol (down to 1e-15)",
+                ch.name,
+                sci(g),
+                sci(s.cfg.quad.tol)
             ));
         }
         if let Some(e) = &ch.estimate {

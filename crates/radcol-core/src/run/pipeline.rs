@@ -41,6 +41,7 @@ pub fn check_size(problem: &Problem, cfg: &SolveConfig) -> Result<u64, InputErro
 /// not fit in memory ([`check_size`]) before building anything.
 pub fn discretize(problem: &Problem, cfg: &SolveConfig) -> Result<Arc<Discretization>, Error> {
     check_quadrature(cfg)?;
+    check_extent(&problem.surface)?;
     let nodes = NodeSet::new(cfg.degree, cfg.alpha)?;
     check_size(problem, cfg)?;
     let surface = &problem.surface;
@@ -49,6 +50,37 @@ pub fn discretize(problem: &Problem, cfg: &SolveConfig) -> Result<Arc<Discretiza
         None => Mesh::new(surface.clone(), cfg.level),
     });
     Ok(Arc::new(Discretization::new(mesh, nodes)))
+}
+
+/// Scenes between this many units across and its inverse are solved. The
+/// kernel divides by |x − y|⁴, which overflows f64 from |x − y| ≈ 1e77 and
+/// underflows below 1e-77; 1e50 leaves 27 decades for elements far smaller
+/// than the scene (box rooms from 1e-60 to 1e60 across give ∫u / L² equal to
+/// 13 digits; at 1e100 the matrix was zero and u = E without a word).
+pub const MAX_EXTENT: f64 = 1e50;
+/// The smallest scene solved, 1 / [`MAX_EXTENT`].
+pub const MIN_EXTENT: f64 = 1e-50;
+
+/// Refuses scenes whose bounding-box diagonal lies outside
+/// [[`MIN_EXTENT`], [`MAX_EXTENT`]] (or is not finite).
+fn check_extent(surface: &crate::geometry::Surface) -> Result<(), InputError> {
+    let (lo, hi) = surface.bounding_box();
+    let d = hi - lo;
+    // The diagonal without squaring tiny or huge components.
+    let m = d.abs().max_element();
+    let extent = if m > 0.0 && m.is_finite() {
+        m * (d / m).length()
+    } else {
+        m
+    };
+    if !(MIN_EXTENT..=MAX_EXTENT).contains(&extent) {
+        return Err(InputError::SceneExtent {
+            extent,
+            min: MIN_EXTENT,
+            max: MAX_EXTENT,
+        });
+    }
+    Ok(())
 }
 
 /// Refuses a quadrature tolerance outside [MIN_QUAD_TOL, 1).
@@ -87,8 +119,14 @@ fn eval_at_nodes(disc: &Discretization, field: &Field, what: &str) -> Result<Vec
 /// ρ and E of one channel at the nodes.
 type NodalFields = (Vec<f64>, Vec<f64>);
 
-/// ρ and E of every channel at the nodes, ρ checked against [0, 1).
+/// ρ and E of every channel at the nodes, ρ checked against [0, 1), and the
+/// exact solution (when given) checked finite there like E.
 fn fields(disc: &Discretization, problem: &Problem) -> Result<Vec<NodalFields>, Error> {
+    // Errors against an exact u that is not finite everywhere would be ∞ or
+    // NaN; checked first, as a manufactured E would inherit the fault.
+    if let Some(exact) = &problem.exact {
+        eval_at_nodes(disc, exact, "exact solution")?;
+    }
     let single = problem.channels.len() == 1;
     let mut fields = Vec::new();
     for ch in &problem.channels {
@@ -143,18 +181,24 @@ fn solve_channels(
             Some(g) if g.len() == emission.len() => g.clone(),
             _ => emission.clone(),
         };
-        let iterations = match cfg.solver {
-            SolverKind::Gmres => gmres(&op, &emission, &mut x, &cfg.gmres)?.iterations,
+        let (iterations, growth, at_rounding_floor) = match cfg.solver {
+            SolverKind::Gmres => {
+                let info = gmres(&op, &emission, &mut x, &cfg.gmres)?;
+                (info.iterations, Some(info.growth), info.at_rounding_floor)
+            }
             SolverKind::Lu => {
                 if lu_cache.as_ref().is_none_or(|(r, _)| *r != rho) {
                     lu_cache = Some((rho.clone(), DenseLu::factor(&op.to_dense())?));
                 }
                 let (_, lu) = lu_cache.as_ref().expect("just built");
                 lu.solve_in_place(&mut x)?;
-                0
+                (0, None, false)
             }
         };
         let residual = true_residual(&op, &x, &emission);
+        if !residual.is_finite() {
+            return Err(crate::solve::SolveError::NonFinite.into());
+        }
         let integral_e = integrate_nodal(disc, &emission);
         let solution = Solution::new(disc.clone(), x);
         channels.push(ChannelResult {
@@ -168,6 +212,8 @@ fn solve_channels(
                 kind: cfg.solver,
                 iterations,
                 residual,
+                growth,
+                at_rounding_floor,
             },
             errors: None,
             estimate: None,
@@ -459,15 +505,24 @@ fn limit_negative(ch: &mut ChannelResult) {
 
 /// ‖b - A x‖ / ‖b‖ (‖A x‖-free: 0 when b = 0 and x = 0).
 pub fn true_residual(op: &dyn LinearOperator, x: &[f64], b: &[f64]) -> f64 {
+    // Relative residuals do not change when x and b are scaled together; at
+    // max |b_i| = 1 the sums of squares neither overflow nor underflow.
+    let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let scale = if scale > 0.0 { scale } else { 1.0 };
+    let xs: Vec<f64> = x.iter().map(|v| v / scale).collect();
     let mut ax = vec![0.0; b.len()];
-    op.apply(x, &mut ax);
+    op.apply(&xs, &mut ax);
     let num: f64 = ax
         .iter()
         .zip(b)
-        .map(|(a, b)| (b - a) * (b - a))
+        .map(|(a, b)| (b / scale - a) * (b / scale - a))
         .sum::<f64>()
         .sqrt();
-    let den: f64 = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let den: f64 = b
+        .iter()
+        .map(|v| (v / scale) * (v / scale))
+        .sum::<f64>()
+        .sqrt();
     if den > 0.0 {
         num / den
     } else {
