@@ -20,8 +20,8 @@
 //! Warnings only (the collocation method uses interior nodes on discontinuous
 //! elements and needs no conforming mesh; the superconvergence theorems do):
 //! T-junctions (a vertex inside another triangle's edge), non-manifold edges
-//! (shared by more than two triangles) and non-planar OBJ polygons (which are
-//! fan-triangulated from their first vertex). Each kind lists at most
+//! (shared by more than two triangles), non-planar OBJ polygons (triangulated
+//! in the plane of their mean normal) and self-intersecting ones. Each kind lists at most
 //! [`MAX_WARNINGS_PER_KIND`] cases and then counts the rest.
 //!
 //! Units are whatever the input uses: every tolerance is relative to the
@@ -31,6 +31,7 @@ mod builder;
 mod builtin;
 pub mod imprint;
 mod obj;
+mod polygon;
 mod validate;
 
 pub use builder::SceneBuilder;

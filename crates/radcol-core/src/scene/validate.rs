@@ -35,21 +35,21 @@ pub(crate) struct RawScene {
 }
 
 /// Collects warnings of one kind, listing the first few and counting the rest.
-struct Capped<'a> {
+pub(crate) struct Capped<'a> {
     out: &'a mut Vec<String>,
     kind: &'static str,
     count: usize,
 }
 
 impl<'a> Capped<'a> {
-    fn new(out: &'a mut Vec<String>, kind: &'static str) -> Self {
+    pub(crate) fn new(out: &'a mut Vec<String>, kind: &'static str) -> Self {
         Self {
             out,
             kind,
             count: 0,
         }
     }
-    fn push(&mut self, message: String) {
+    pub(crate) fn push(&mut self, message: String) {
         if self.count < MAX_WARNINGS_PER_KIND {
             self.out.push(message);
         }
@@ -326,11 +326,13 @@ fn t_junctions(tris: &[[DVec3; 3]], raw: &[RawTriangle], scale: f64, warnings: &
     let mut found: Vec<(usize, usize, DVec3)> = Vec::new();
     let mut sorted_edges: Vec<_> = edges.into_values().collect();
     sorted_edges.sort_by_key(|e| e.2);
-    for (p, q, face) in sorted_edges {
+    // The last edge each vertex was tested against: a vertex near many steps
+    // of one edge is tested once, in constant time.
+    let mut tested_for = vec![usize::MAX; verts.len()];
+    for (e, (p, q, face)) in sorted_edges.into_iter().enumerate() {
         let d = q - p;
         let len2 = d.length_squared();
         let steps = ((len2.sqrt() / h).ceil() as usize).max(1);
-        let mut tested: Vec<usize> = Vec::new();
         for s in 0..=steps {
             let c = cell(p + d * (s as f64 / steps as f64));
             for dx in -1..=1 {
@@ -340,10 +342,10 @@ fn t_junctions(tris: &[[DVec3; 3]], raw: &[RawTriangle], scale: f64, warnings: &
                             continue;
                         };
                         for &vi in list {
-                            if tested.contains(&vi) {
+                            if tested_for[vi] == e {
                                 continue;
                             }
-                            tested.push(vi);
+                            tested_for[vi] = e;
                             let v = verts[vi];
                             let t = (v - p).dot(d) / len2;
                             let off = (p + d * t - v).length();

@@ -112,7 +112,12 @@ pub fn is_convex_enclosure(tris: &[[DVec3; 3]]) -> bool {
 
 /// A triangle index and a vertex strictly behind its plane, if any (relative
 /// tolerance 1e-9 of the scene's size, so that units do not matter).
+///
+/// Each distinct plane is tested once against every vertex, in parallel: a
+/// flat floor of 361 k triangles is one plane (the test over every triangle
+/// had taken minutes before a memory check could refuse the scene).
 fn concave_witness(tris: &[[DVec3; 3]]) -> Option<(usize, DVec3)> {
+    use rayon::prelude::*;
     let (lo, hi) = crate::geometry::bounds(tris.iter().flatten().copied());
     let scale = (hi - lo).length();
     let mut verts: Vec<DVec3> = tris.iter().flatten().copied().collect();
@@ -122,6 +127,9 @@ fn concave_witness(tris: &[[DVec3; 3]]) -> Option<(usize, DVec3)> {
             .unwrap_or(std::cmp::Ordering::Equal)
     });
     verts.dedup();
+    // One representative triangle per plane (unit normal and offset rounded
+    // to 1e-12; planes split by the rounding are merely tested twice).
+    let mut planes: std::collections::HashMap<[i64; 4], usize> = Default::default();
     for (i, [a, b, c]) in tris.iter().enumerate() {
         let n = (*b - *a).cross(*c - *a);
         let len = n.length();
@@ -129,11 +137,21 @@ fn concave_witness(tris: &[[DVec3; 3]]) -> Option<(usize, DVec3)> {
             continue;
         }
         let n = n / len;
-        if let Some(v) = verts.iter().find(|v| (**v - *a).dot(n) < -1e-9 * scale) {
-            return Some((i, *v));
-        }
+        let q = |x: f64| (x * 1e12).round() as i64;
+        planes
+            .entry([q(n.x), q(n.y), q(n.z), q(a.dot(n) / scale)])
+            .or_insert(i);
     }
-    None
+    let mut reps: Vec<usize> = planes.into_values().collect();
+    reps.sort_unstable();
+    reps.par_iter().find_map_first(|&i| {
+        let [a, b, c] = tris[i];
+        let n = (b - a).cross(c - a).normalize();
+        verts
+            .iter()
+            .find(|v| (**v - a).dot(n) < -1e-9 * scale)
+            .map(|v| (i, *v))
+    })
 }
 
 #[cfg(test)]
