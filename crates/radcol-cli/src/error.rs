@@ -47,6 +47,17 @@ pub fn with_flags(err: CoreError) -> anyhow::Error {
         CoreError::Input(e @ InputError::TooLarge { .. }) => {
             bad_input(format!("{e} (flags: --level, --max-edge, --degree)")).into()
         }
+        // Values of the scalar problem's fields come from these flags (a
+        // scene's per-channel ones, "reflectivity R", from its materials).
+        CoreError::Input(e @ InputError::Reflectivity { name, .. }) if name == "reflectivity" => {
+            bad_input(format!("--rho: {e}")).into()
+        }
+        CoreError::Input(e @ InputError::InvalidValue { what, .. }) => match what.as_str() {
+            "reflectivity" => bad_input(format!("--rho: {e}")).into(),
+            "emission" => bad_input(format!("--emission: {e}")).into(),
+            "exact solution" => bad_input(format!("--exact: {e}")).into(),
+            _ => anyhow::Error::new(err),
+        },
         _ => anyhow::Error::new(err),
     }
 }

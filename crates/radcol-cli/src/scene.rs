@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 /// The forms a SCENE argument may take, for error messages.
 pub const VALID_FORMS: &str = "sphere, sphere:R, ellipsoid:A,B,C, box:LX,LY,LZ, \
-the built-in scenes cornell, room, plates, or FILE.obj";
+the built-in scenes cornell, room, lroom, shadow, plates, or FILE.obj";
 
 /// A parsed SCENE argument.
 #[derive(Clone, Debug, PartialEq)]

@@ -221,7 +221,10 @@ pub fn look(spec: &LookSpec, s: &Setup) -> Look {
 }
 
 /// Checks, before any work, that `file` may be written: not a directory, an
-/// existing parent directory, and no existing file unless `--force`.
+/// existing parent directory, no existing file unless `--force`, and the
+/// system lets us write it (a read-only directory or `/proc` used to be found
+/// only after the solve, losing its report). The probe creates and removes
+/// the file, or opens an existing one without truncating it.
 pub fn check_writable(file: &OutputFile) -> Result<(), crate::error::BadInput> {
     let (flag, path) = (file.flag, &file.path);
     let shown = path.display();
@@ -241,7 +244,19 @@ pub fn check_writable(file: &OutputFile) -> Result<(), crate::error::BadInput> {
             )));
         }
     }
-    Ok(())
+    let probe = if path.exists() {
+        std::fs::OpenOptions::new().write(true).open(path).map(drop)
+    } else {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(path)
+            .and_then(|f| {
+                drop(f);
+                std::fs::remove_file(path)
+            })
+    };
+    probe.map_err(|e| bad_input(format!("{flag} {shown} cannot be written: {e}")))
 }
 
 #[cfg(test)]

@@ -5,14 +5,11 @@
 //! (`CARGO_BIN_EXE_radcol`), made by the same `cargo test` with the same
 //! features, so nothing is compiled twice.
 
-use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-/// The `radcol` binary under test.
-fn radcol_bin() -> &'static Path {
-    Path::new(env!("CARGO_BIN_EXE_radcol"))
-}
+use common::{radcol_bin, scratch};
+use serde_json::Value;
+use std::process::{Command, Output};
 
 fn radcol(args: &[&str]) -> Output {
     Command::new(radcol_bin())
@@ -75,18 +72,6 @@ fn assert_one_line_error(args: &[&str], code: i32, needles: &[&str]) -> String {
         );
     }
     lines[0].to_string()
-}
-
-/// A fresh scratch directory under the target directory.
-fn scratch(name: &str) -> PathBuf {
-    let dir = radcol_bin()
-        .parent()
-        .expect("profile dir")
-        .join("cli-test-scratch")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir
 }
 
 fn num(v: &Value, key: &str) -> f64 {

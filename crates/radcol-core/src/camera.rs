@@ -47,8 +47,22 @@ impl Camera {
     /// Checks that eye ≠ target, up is not parallel to the view direction and
     /// the field of view lies in (0, 180) degrees.
     pub fn validate(&self) -> Result<(), String> {
+        for (name, v) in [("eye", self.eye), ("target", self.target), ("up", self.up)] {
+            if !v.is_finite() {
+                return Err(format!("camera: {name} {v} is not finite"));
+            }
+        }
         let fwd = self.target - self.eye;
-        if fwd.length().is_nan() || fwd.length() <= 0.0 {
+        // Differences and lengths of coordinates near f64's limits overflow.
+        if !fwd.is_finite() || !fwd.length().is_finite() || !self.up.length().is_finite() {
+            let e = |v: DVec3| format!("({:e}, {:e}, {:e})", v.x, v.y, v.z);
+            return Err(format!(
+                "camera: eye {} and target {} are too far apart for double precision (their distance overflows)",
+                e(self.eye),
+                e(self.target)
+            ));
+        }
+        if fwd.length() <= 0.0 {
             return Err("camera: eye and target coincide".into());
         }
         let sine = fwd.normalize().cross(self.up).length();

@@ -13,7 +13,7 @@ pub enum InputError {
         degree: usize,
     },
     /// Node parameter out of range.
-    #[error("alpha = {alpha} must lie strictly between 0 and 1/3 so that all nodes are interior")]
+    #[error("alpha = {alpha} must lie in [1e-9, 1/3): below 1/3 so that all nodes are interior, and at least 1e-9 because nodes within rounding of an element's corners coincide with its neighbours' and make the curved maps singular (the sphere failed at 1e-14)")]
     Alpha {
         /// The α asked for.
         alpha: f64,
@@ -55,9 +55,10 @@ pub enum InputError {
         position: DVec3,
     },
     /// The dense matrix would not fit in memory.
-    #[error("{unknowns} unknowns need a dense {unknowns}×{unknowns} matrix: {} for the matrix (plus {} for an LU copy), but only {} of memory is available; use a coarser mesh or a lower degree", gib(*bytes_matrix), gib(*bytes_lu), gib(*bytes_available as f64))]
+    #[error("{}, but only {} of memory is available; use a coarser mesh or a lower degree", need(*unknowns, *bytes_matrix, *bytes_lu), gib(*bytes_available as f64))]
     TooLarge {
-        /// Number of unknowns N.
+        /// Number of unknowns N (`u64::MAX` when counting stopped: more than
+        /// any memory holds).
         unknowns: u64,
         /// Bytes for the geometric matrix (8 N²).
         bytes_matrix: f64,
@@ -126,6 +127,20 @@ fn gib(bytes: f64) -> String {
         format!("{g:.2} GiB")
     } else {
         format!("{g:.3e} GiB")
+    }
+}
+
+/// What N unknowns need; `u64::MAX` is where counting stopped (more than
+/// 4 million elements).
+fn need(unknowns: u64, matrix: f64, lu: f64) -> String {
+    if unknowns == u64::MAX {
+        "more than 4 million unknowns (counting stopped there) need a dense matrix of more than 100 TiB".into()
+    } else {
+        format!(
+            "{unknowns} unknowns need a dense matrix of {} (plus {} for an LU copy)",
+            gib(matrix),
+            gib(lu)
+        )
     }
 }
 

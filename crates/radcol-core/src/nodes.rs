@@ -35,9 +35,15 @@ pub fn check_degree(r: usize) -> Result<usize, InputError> {
     Ok(r)
 }
 
-/// `alpha` when it lies strictly between 0 and 1/3 (every node interior).
+/// The smallest α accepted: the unit sphere at level 1 gave NaN from α =
+/// 1e-14 (nodes within rounding of the patch corners); 1e-9 keeps a margin
+/// of 1e5 and already has a Lebesgue constant far beyond any useful one.
+pub const MIN_ALPHA: f64 = 1e-9;
+
+/// `alpha` when it lies in [[`MIN_ALPHA`], 1/3) (every node interior, and
+/// not within rounding of an element's corners).
 pub fn check_alpha(alpha: f64) -> Result<f64, InputError> {
-    if !(alpha > 0.0 && alpha < 1.0 / 3.0) {
+    if !(MIN_ALPHA..1.0 / 3.0).contains(&alpha) {
         return Err(InputError::Alpha { alpha });
     }
     Ok(alpha)

@@ -133,6 +133,12 @@ pub struct ShapeRatio {
     pub max: f64,
 }
 
+impl InfoReport {
+    fn unknowns_per_element(&self) -> u64 {
+        radcol_core::nodes::nodes_per_element(self.degree) as u64
+    }
+}
+
 fn gib(bytes: f64) -> String {
     let g = bytes / 1073741824.0;
     if g < 1e6 {
@@ -151,11 +157,22 @@ impl fmt::Display for InfoReport {
             i.scene,
             i.level,
             i.max_edge
-                .map(|h| format!(", max edge {h:.6}"))
+                .map(|h| format!(", max edge {h}"))
                 .unwrap_or_default(),
             i.degree
         )?;
-        writeln!(w, "  elements        {}", i.elements)?;
+        // The count with a maximum edge stops at MAX_EDGE_COUNT_CAP elements
+        // and saturates: no dense matrix of that size fits anywhere.
+        let stopped = i.elements == u64::MAX;
+        let cap = radcol_core::mesh::MAX_EDGE_COUNT_CAP;
+        if stopped {
+            writeln!(
+                w,
+                "  elements        more than {cap} (counting stopped there)"
+            )?;
+        } else {
+            writeln!(w, "  elements        {}", i.elements)?;
+        }
         writeln!(w, "  patches         {}", i.patches)?;
         writeln!(w, "  base triangles  {}", i.base_triangles)?;
         writeln!(w, "  h               {:.6}", i.h)?;
@@ -178,21 +195,39 @@ impl fmt::Display for InfoReport {
             i.shape_ratio.min, i.shape_ratio.max
         )?;
         writeln!(w, "  area            {}{at}", precise(i.area))?;
-        writeln!(w, "  unknowns        {} at r = {}", i.unknowns, i.degree)?;
+        if stopped {
+            writeln!(
+                w,
+                "  unknowns        more than {} at r = {}",
+                cap * i.unknowns_per_element(),
+                i.degree
+            )?;
+        } else {
+            writeln!(w, "  unknowns        {} at r = {}", i.unknowns, i.degree)?;
+        }
         let avail = i
             .memory
             .available_bytes
             .map(|b| gib(b as f64))
             .unwrap_or_else(|| "unknown".into());
         let yes = |b: bool| if b { "fits" } else { "does NOT fit" };
-        writeln!(
-            w,
-            "  dense matrix    {} ({}); with --solver lu {} ({}); available {avail}",
-            gib(i.memory.matrix_bytes),
-            yes(i.memory.fits_gmres),
-            gib(i.memory.matrix_bytes + i.memory.lu_extra_bytes),
-            yes(i.memory.fits_lu)
-        )?;
+        if stopped {
+            let n = (cap * i.unknowns_per_element()) as f64;
+            writeln!(
+                w,
+                "  dense matrix    more than {} (does NOT fit); available {avail}",
+                gib(8.0 * n * n)
+            )?;
+        } else {
+            writeln!(
+                w,
+                "  dense matrix    {} ({}); with --solver lu {} ({}); available {avail}",
+                gib(i.memory.matrix_bytes),
+                yes(i.memory.fits_gmres),
+                gib(i.memory.matrix_bytes + i.memory.lu_extra_bytes),
+                yes(i.memory.fits_lu)
+            )?;
+        }
         writeln!(w, "  visibility      {}", i.visibility.reason)?;
         writeln!(
             w,
