@@ -134,8 +134,40 @@ pub struct ShapeRatio {
 }
 
 impl InfoReport {
-    fn unknowns_per_element(&self) -> u64 {
-        radcol_core::nodes::nodes_per_element(self.degree) as u64
+    /// The count with a maximum edge stops at `MAX_EDGE_COUNT_CAP` elements
+    /// and saturates: no dense matrix of that size fits anywhere.
+    fn stopped(&self) -> bool {
+        self.elements == u64::MAX
+    }
+
+    /// The unknowns and dense-matrix lines.
+    fn fmt_size(&self, w: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let i = self;
+        let avail = i
+            .memory
+            .available_bytes
+            .map(|b| gib(b as f64))
+            .unwrap_or_else(|| "unknown".into());
+        if i.stopped() {
+            let per = radcol_core::nodes::nodes_per_element(i.degree) as u64;
+            let n = radcol_core::mesh::MAX_EDGE_COUNT_CAP * per;
+            writeln!(w, "  unknowns        more than {n} at r = {}", i.degree)?;
+            return writeln!(
+                w,
+                "  dense matrix    more than {} (does NOT fit); available {avail}",
+                gib(8.0 * (n as f64).powi(2))
+            );
+        }
+        writeln!(w, "  unknowns        {} at r = {}", i.unknowns, i.degree)?;
+        let yes = |b: bool| if b { "fits" } else { "does NOT fit" };
+        writeln!(
+            w,
+            "  dense matrix    {} ({}); with --solver lu {} ({}); available {avail}",
+            gib(i.memory.matrix_bytes),
+            yes(i.memory.fits_gmres),
+            gib(i.memory.matrix_bytes + i.memory.lu_extra_bytes),
+            yes(i.memory.fits_lu)
+        )
     }
 }
 
@@ -161,11 +193,8 @@ impl fmt::Display for InfoReport {
                 .unwrap_or_default(),
             i.degree
         )?;
-        // The count with a maximum edge stops at MAX_EDGE_COUNT_CAP elements
-        // and saturates: no dense matrix of that size fits anywhere.
-        let stopped = i.elements == u64::MAX;
-        let cap = radcol_core::mesh::MAX_EDGE_COUNT_CAP;
-        if stopped {
+        if i.stopped() {
+            let cap = radcol_core::mesh::MAX_EDGE_COUNT_CAP;
             writeln!(
                 w,
                 "  elements        more than {cap} (counting stopped there)"
@@ -195,39 +224,7 @@ impl fmt::Display for InfoReport {
             i.shape_ratio.min, i.shape_ratio.max
         )?;
         writeln!(w, "  area            {}{at}", precise(i.area))?;
-        if stopped {
-            writeln!(
-                w,
-                "  unknowns        more than {} at r = {}",
-                cap * i.unknowns_per_element(),
-                i.degree
-            )?;
-        } else {
-            writeln!(w, "  unknowns        {} at r = {}", i.unknowns, i.degree)?;
-        }
-        let avail = i
-            .memory
-            .available_bytes
-            .map(|b| gib(b as f64))
-            .unwrap_or_else(|| "unknown".into());
-        let yes = |b: bool| if b { "fits" } else { "does NOT fit" };
-        if stopped {
-            let n = (cap * i.unknowns_per_element()) as f64;
-            writeln!(
-                w,
-                "  dense matrix    more than {} (does NOT fit); available {avail}",
-                gib(8.0 * n * n)
-            )?;
-        } else {
-            writeln!(
-                w,
-                "  dense matrix    {} ({}); with --solver lu {} ({}); available {avail}",
-                gib(i.memory.matrix_bytes),
-                yes(i.memory.fits_gmres),
-                gib(i.memory.matrix_bytes + i.memory.lu_extra_bytes),
-                yes(i.memory.fits_lu)
-            )?;
-        }
+        i.fmt_size(w)?;
         writeln!(w, "  visibility      {}", i.visibility.reason)?;
         writeln!(
             w,

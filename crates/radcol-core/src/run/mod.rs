@@ -14,11 +14,13 @@
 
 pub mod adapt;
 mod config;
+mod inputs;
 mod outcome;
 mod pipeline;
 mod size;
 
 pub use config::{SolveConfig, SolverKind};
+pub use inputs::{check_size, discretize, MAX_EXTENT, MIN_EXTENT};
 pub use outcome::{ChannelResult, SolveOutcome, SolverReport, Timings};
-pub use pipeline::{check_size, discretize, solve, solve_on_mesh, true_residual};
+pub use pipeline::{solve, solve_on_mesh, true_residual};
 pub use size::{available_memory, elements, mesh_size, MemoryEstimate, MeshSize};

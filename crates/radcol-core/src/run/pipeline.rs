@@ -1,11 +1,12 @@
 //! The stages of one solve (see the module overview in [`super`]).
 
-use super::size::{available_memory, mesh_size, MemoryEstimate};
+use super::inputs::{check_quadrature, discretize, fields, NodalFields};
+use super::size::{available_memory, MemoryEstimate};
 use super::{ChannelResult, SolveConfig, SolveOutcome, SolverKind, SolverReport, Timings};
+use crate::assembly::QuadratureOptions;
 use crate::assembly::{Assembled, AssemblyBackend, AssemblyPlan, Unchanged};
-use crate::assembly::{QuadratureOptions, MIN_QUAD_TOL};
 use crate::discretization::Discretization;
-use crate::error::{Error, InputError};
+use crate::error::Error;
 use crate::estimate::{
     check_matrix, check_nodes, estimate, estimate_from, ChannelFields, ESTIMATE_QUAD_TOL,
 };
@@ -13,152 +14,12 @@ use crate::matrix::DenseMatrix;
 use crate::mesh::Mesh;
 use crate::nodes::NodeSet;
 use crate::norms::error_norms;
-use crate::problem::{Field, Problem};
+use crate::problem::Problem;
 use crate::solution::{integrate_nodal, Solution};
 use crate::solve::{gmres, DenseLu, LinearOperator, RadiosityOperator};
 use crate::visibility::{self, VisibilityAnalysis};
-use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
-
-/// Checks, before anything is built, that the mesh `cfg` asks for on
-/// `problem`'s surface is valid and its dense matrices fit in memory (when
-/// `cfg.check_memory`); returns its unknowns.
-pub fn check_size(problem: &Problem, cfg: &SolveConfig) -> Result<u64, InputError> {
-    if let Some(h) = cfg.max_edge {
-        if !(h.is_finite() && h > 0.0) {
-            return Err(InputError::MaxEdge { value: h });
-        }
-    }
-    let n = mesh_size(&problem.surface, cfg.level, cfg.max_edge, cfg.degree).unknowns;
-    if cfg.check_memory {
-        MemoryEstimate::new(n).check(cfg.solver)?;
-    }
-    Ok(n)
-}
-
-/// Builds the mesh and collocation points for `cfg`, refusing sizes that do
-/// not fit in memory ([`check_size`]) before building anything.
-pub fn discretize(problem: &Problem, cfg: &SolveConfig) -> Result<Arc<Discretization>, Error> {
-    check_quadrature(cfg)?;
-    check_extent(&problem.surface)?;
-    let nodes = NodeSet::new(cfg.degree, cfg.alpha)?;
-    check_size(problem, cfg)?;
-    let surface = &problem.surface;
-    let mesh = Arc::new(match cfg.max_edge {
-        Some(h) => Mesh::with_max_edge(surface.clone(), cfg.level, h),
-        None => Mesh::new(surface.clone(), cfg.level),
-    });
-    Ok(Arc::new(Discretization::new(mesh, nodes)))
-}
-
-/// Scenes between this many units across and its inverse are solved. The
-/// kernel divides by |x − y|⁴, which overflows f64 from |x − y| ≈ 1e77 and
-/// underflows below 1e-77; 1e50 leaves 27 decades for elements far smaller
-/// than the scene (box rooms from 1e-60 to 1e60 across give ∫u / L² equal to
-/// 13 digits; at 1e100 the matrix was zero and u = E without a word).
-pub const MAX_EXTENT: f64 = 1e50;
-/// The smallest scene solved, 1 / [`MAX_EXTENT`].
-pub const MIN_EXTENT: f64 = 1e-50;
-
-/// Refuses scenes whose bounding-box diagonal lies outside
-/// [[`MIN_EXTENT`], [`MAX_EXTENT`]] (or is not finite).
-fn check_extent(surface: &crate::geometry::Surface) -> Result<(), InputError> {
-    let (lo, hi) = surface.bounding_box();
-    let d = hi - lo;
-    // The diagonal without squaring tiny or huge components.
-    let m = d.abs().max_element();
-    let extent = if m > 0.0 && m.is_finite() {
-        m * (d / m).length()
-    } else {
-        m
-    };
-    if !(MIN_EXTENT..=MAX_EXTENT).contains(&extent) {
-        return Err(InputError::SceneExtent {
-            extent,
-            min: MIN_EXTENT,
-            max: MAX_EXTENT,
-        });
-    }
-    Ok(())
-}
-
-/// Refuses a quadrature tolerance outside [MIN_QUAD_TOL, 1).
-fn check_quadrature(cfg: &SolveConfig) -> Result<(), InputError> {
-    let tol = cfg.quad.tol;
-    if !(MIN_QUAD_TOL..1.0).contains(&tol) {
-        return Err(InputError::QuadratureTolerance {
-            value: tol,
-            min: MIN_QUAD_TOL,
-        });
-    }
-    Ok(())
-}
-
-/// Evaluates `field` at every collocation point, rejecting non-finite values.
-fn eval_at_nodes(disc: &Discretization, field: &Field, what: &str) -> Result<Vec<f64>, InputError> {
-    let mesh = disc.mesh();
-    let values: Vec<f64> = disc
-        .points()
-        .par_iter()
-        .map(|p| field.eval(&mesh.site(p.element, p.st[0], p.st[1])))
-        .collect();
-    if let Some((i, &v)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        let p = disc.points()[i];
-        return Err(InputError::InvalidValue {
-            what: what.into(),
-            value: v,
-            element: p.element,
-            node: p.node,
-            position: p.position,
-        });
-    }
-    Ok(values)
-}
-
-/// ρ and E of one channel at the nodes.
-type NodalFields = (Vec<f64>, Vec<f64>);
-
-/// ρ and E of every channel at the nodes, ρ checked against [0, 1), and the
-/// exact solution (when given) checked finite there like E.
-fn fields(disc: &Discretization, problem: &Problem) -> Result<Vec<NodalFields>, Error> {
-    // Errors against an exact u that is not finite everywhere would be ∞ or
-    // NaN; checked first, as a manufactured E would inherit the fault.
-    if let Some(exact) = &problem.exact {
-        eval_at_nodes(disc, exact, "exact solution")?;
-    }
-    let single = problem.channels.len() == 1;
-    let mut fields = Vec::new();
-    for ch in &problem.channels {
-        // "reflectivity" alone for a scalar problem, "reflectivity R" for a colour channel.
-        let label = |what: &str| {
-            if single {
-                what.to_string()
-            } else {
-                format!("{what} {}", ch.name)
-            }
-        };
-        let rho = eval_at_nodes(disc, &ch.rho, &label("reflectivity"))?;
-        if let Some((i, &v)) = rho
-            .iter()
-            .enumerate()
-            .find(|(_, v)| !(0.0..1.0).contains(*v))
-        {
-            let p = disc.points()[i];
-            return Err(InputError::Reflectivity {
-                name: label("reflectivity"),
-                value: v,
-                element: p.element,
-                node: p.node,
-                position: p.position,
-            }
-            .into());
-        }
-        let emission = eval_at_nodes(disc, &ch.emission, &label("emission"))?;
-        fields.push((rho, emission));
-    }
-    Ok(fields)
-}
 
 /// Solves every channel's system (I - diag ρ_c Gm) u = E_c; LU factors are
 /// shared between consecutive channels with equal ρ.
@@ -533,7 +394,9 @@ pub fn true_residual(op: &dyn LinearOperator, x: &[f64], b: &[f64]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::InputError;
     use crate::geometry::shapes::box_room;
+    use crate::problem::Field;
 
     /// `max_edge` reaches the mesh, bad values are refused, and the memory
     /// check sees the refined count before anything is built.

@@ -32,6 +32,7 @@ mod builtin;
 pub mod imprint;
 mod obj;
 mod polygon;
+mod tobj_match;
 mod validate;
 
 pub use builder::SceneBuilder;
