@@ -647,6 +647,24 @@ fn obj_cases() -> Vec<Case> {
             Refused(2, &["big.obj", "300.0 MiB", "256 MiB"]),
         ),
     ];
+    // A unit light and floor, and one far triangle at 1.2e8: degeneracy is
+    // judged per triangle, so the light stays (∫E of R = its area 0.5).
+    cases.push(with_files(
+        case(
+            "vertex at 1.2e8",
+            &solve,
+            Answer("/channels/0/integral_e", 0.5, 1e-14),
+        ),
+        vec![
+            ("w.mtl", format!("{WHITE}newmtl grey\nKd 0.5 0.5 0.5\n").into_bytes()),
+            (
+                "s.obj",
+                "mtllib w.mtl\nv 0 0 1\nv 0 1 1\nv 1 0 1\nv 0 0 0\nv 1 0 0\nv 0 1 0\n\
+                 v 1.2e8 0 0\nv 1.2e8 1 0\nv 1.2e8 0 1\nusemtl white\nf 1 2 3\nusemtl grey\nf 4 5 6\nf 7 8 9\n"
+                    .into(),
+            ),
+        ],
+    ));
     // The L from every corner: ear clipping covers exactly its area 3 (a fan
     // from 4 of the 6 corners flipped a triangle over the notch).
     for start in 0..6 {

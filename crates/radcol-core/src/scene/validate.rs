@@ -134,7 +134,7 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
     );
     let scale = (hi - lo).length();
 
-    let (kept, degenerate) = drop_degenerate_and_duplicates(triangles, scale, &mut warnings);
+    let (kept, degenerate) = drop_degenerate_and_duplicates(triangles, &mut warnings);
     if kept.is_empty() {
         return Err(SceneError::Empty {
             name,
@@ -165,13 +165,34 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
     })
 }
 
-/// Drops degenerate triangles (area at most 1e-12 of the squared scene
-/// diagonal `scale`) and duplicates (same vertices, same orientation), with
+/// Why a triangle is degenerate, judged by its own size: a sliver (area at
+/// most 1e-12 of its longest edge squared, or not finite), or smaller than
+/// the rounding of its coordinates (longest edge within 1e3 ulps of them).
+/// A tolerance relative to the scene instead dropped a unit light when one
+/// vertex of the scene lay at 1.2e8 (issue 12).
+fn degenerate_why([a, b, c]: [DVec3; 3]) -> Option<String> {
+    let area = 0.5 * (b - a).cross(c - a).length();
+    let longest = (b - a).length().max((c - b).length()).max((a - c).length());
+    let reach = a.abs().max(b.abs()).max(c.abs()).max_element();
+    if !area.is_finite() || area <= 1e-12 * longest * longest {
+        Some(format!(
+            "area {area:e} with longest edge {longest:e}: a sliver"
+        ))
+    } else if longest <= 1e3 * f64::EPSILON * reach {
+        Some(format!(
+            "longest edge {longest:e} is within rounding of its coordinates ({reach:e})"
+        ))
+    } else {
+        None
+    }
+}
+
+/// Drops degenerate triangles ([`degenerate_why`]) and duplicates (same
+/// vertices, same orientation), with
 /// a capped warning for each; returns the kept triangles and how many were
 /// degenerate.
 fn drop_degenerate_and_duplicates(
     triangles: Vec<RawTriangle>,
-    scale: f64,
     warnings: &mut Vec<String>,
 ) -> (Vec<RawTriangle>, usize) {
     let mut kept: Vec<RawTriangle> = Vec::with_capacity(triangles.len());
@@ -181,13 +202,8 @@ fn drop_degenerate_and_duplicates(
         let mut deg = Capped::new(warnings, "degenerate-triangle");
         let mut dup_list = Vec::new();
         for t in triangles {
-            let [a, b, c] = t.vertices;
-            let area = 0.5 * (b - a).cross(c - a).length();
-            if area.is_nan() || area <= 1e-12 * scale * scale {
-                deg.push(format!(
-                    "{}: degenerate triangle (area {area:e}, scene diagonal {scale:e}) dropped",
-                    t.at
-                ));
+            if let Some(why) = degenerate_why(t.vertices) {
+                deg.push(format!("{}: degenerate triangle ({why}) dropped", t.at));
                 degenerate += 1;
                 continue;
             }
