@@ -647,6 +647,19 @@ fn obj_cases() -> Vec<Case> {
             Refused(2, &["big.obj", "300.0 MiB", "256 MiB"]),
         ),
     ];
+    // A floor given twice with the other diagonal: counted twice, warned.
+    cases.push(with_files(
+        case(
+            "floor twice",
+            &solve,
+            Warned(&[
+                "s.obj:9: overlaps the triangle at",
+                "s.obj:7",
+                "counted twice",
+            ]),
+        ),
+        obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\nf 1 2 4\nf 2 3 4\n"),
+    ));
     // A unit light and floor, and one far triangle at 1.2e8: degeneracy is
     // judged per triangle, so the light stays (∫E of R = its area 0.5).
     cases.push(with_files(

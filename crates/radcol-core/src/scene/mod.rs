@@ -31,6 +31,7 @@ mod builder;
 mod builtin;
 pub mod imprint;
 mod obj;
+mod overlap;
 mod polygon;
 mod tobj_match;
 mod validate;

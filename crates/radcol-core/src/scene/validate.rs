@@ -144,6 +144,15 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
 
     let tris: Vec<[DVec3; 3]> = kept.iter().map(|t| t.vertices).collect();
     non_manifold_edges(&tris, &kept, &mut warnings);
+    {
+        let mut w = Capped::new(&mut warnings, "overlapping-triangles");
+        for (i, j) in super::overlap::coplanar_overlaps(&tris, scale) {
+            w.push(format!(
+                "{}: overlaps the triangle at {} in the same plane, facing the same way: that area is counted twice",
+                kept[j].at, kept[i].at
+            ));
+        }
+    }
     t_junctions(&tris, &kept, scale, &mut warnings);
     let (kept, imprinted) = super::imprint::contact_lines(kept, scale);
 
