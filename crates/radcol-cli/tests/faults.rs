@@ -201,6 +201,22 @@ fn magnitude_cases() -> Vec<Case> {
             "2",
         ]
     };
+    // Flat ellipsoids: the rim's radius of curvature is c² (c = 1e-6: 1e-12).
+    let flat = |c: &'static str| -> [&'static str; 10] {
+        let e: &'static str = Box::leak(format!("ellipsoid:1,{c},1").into_boxed_str());
+        [
+            "solve",
+            e,
+            "--level",
+            "1",
+            "--rho",
+            "0.5",
+            "--emission",
+            "1",
+            "--exact",
+            "2",
+        ]
+    };
     let high = |rho: &'static str| {
         [
             "solve",
@@ -330,6 +346,33 @@ fn magnitude_cases() -> Vec<Case> {
         case(
             "box 1e-8 thin",
             &thin("1e-8"),
+            Below("/channels/0/errors/global_max", 1e-8),
+        ),
+        case(
+            "box 1e-11 thin",
+            &thin("1e-11"),
+            Warned(&[
+                "quadrature:",
+                "subdivision limit",
+                "--quad-tol",
+                "within 1.000e-11 of element",
+            ]),
+        ),
+        // Self pairs on the rim of a flat ellipsoid: the Duffy rule's windows
+        // are checked and split where the normal turns within them.
+        case(
+            "ellipsoid c = 0.1",
+            &flat("0.1"),
+            Below("/channels/0/errors/global_max", 1e-8),
+        ),
+        case(
+            "ellipsoid c = 1e-3",
+            &flat("1e-3"),
+            Below("/channels/0/errors/global_max", 1e-8),
+        ),
+        case(
+            "ellipsoid c = 1e-6",
+            &flat("1e-6"),
             Below("/channels/0/errors/global_max", 1e-8),
         ),
         case(

@@ -417,7 +417,8 @@ impl fmt::Display for SolveReport {
 }
 
 /// Warnings about the trustworthiness of a solve: ill-conditioned
-/// interpolation (the Lebesgue constant of the nodes), an inaccurate linear
+/// interpolation (the Lebesgue constant of the nodes), quadrature that fell
+/// short of its tolerance (nearly touching surfaces), an inaccurate linear
 /// solve (the true residual), and a large estimated error. Each says what to
 /// change.
 fn solve_warnings(s: &crate::setup::Setup, out: &radcol_core::run::SolveOutcome) -> Vec<String> {
@@ -437,6 +438,21 @@ fn solve_warnings(s: &crate::setup::Setup, out: &radcol_core::run::SolveOutcome)
                 s.cfg.alpha
             ));
         }
+    }
+    if let Some(f) = out.plan.shortfall {
+        let [x, y, z] = f.point;
+        let on = f
+            .point_element
+            .map_or(String::new(), |k| format!(" on element {k}"));
+        w.push(format!(
+            "quadrature: {} integral pieces stopped at the subdivision limit short of --quad-tol {}; \
+             the closest: the point ({x:.6e}, {y:.6e}, {z:.6e}){on} lies within {} of element {}: surfaces that \
+             (nearly) touch there make entries near it less accurate than asked",
+            f.pieces,
+            sci(s.cfg.quad.tol),
+            sci(f.distance),
+            f.element
+        ));
     }
     let tol = s.cfg.gmres.rel_tol;
     for ch in &out.channels {

@@ -17,7 +17,7 @@ pub mod plan;
 
 pub use cpu::CpuBackend;
 pub use integrate::{
-    ElementIntegrator, FieldPoint, QuadratureOptions, VisibilityMode, MIN_QUAD_TOL,
+    ElementIntegrator, FieldPoint, QuadratureOptions, Shortfall, VisibilityMode, MIN_QUAD_TOL,
 };
 pub use plan::{AssemblyPlan, FarTable, FillMode, PairClass, PlanStats, Unchanged};
 

@@ -23,7 +23,7 @@ pub use kernels::far_kernel_row;
 pub use reuse::Unchanged;
 pub use tables::FarTable;
 
-use super::integrate::{ElementIntegrator, QuadratureOptions, SelfRules};
+use super::integrate::{ElementIntegrator, QuadratureOptions, SelfRules, Shortfall, ShortfallLog};
 use crate::discretization::Discretization;
 use crate::progress::ProgressHandle;
 use crate::quadrature::{RuleLadder, MAX_RULE_DEGREE};
@@ -49,6 +49,9 @@ pub struct PlanStats {
     pub pairs_partial: u64,
     /// Kernel evaluations of the far pairs: Σ rule points.
     pub far_kernel_evals: u64,
+    /// Integrals of the assembly so far that stopped at a depth limit short
+    /// of the quadrature tolerance (touching or nearly touching surfaces).
+    pub shortfall: Option<Shortfall>,
 }
 
 /// Which parts of a row block to fill.
@@ -76,6 +79,7 @@ pub struct AssemblyPlan {
     opts: QuadratureOptions,
     ladder: RuleLadder,
     self_rule: Arc<SelfRules>,
+    shortfall: Arc<ShortfallLog>,
     classes: Vec<u8>,
     tables: Vec<Option<FarTable>>,
     stats: PlanStats,
@@ -205,6 +209,7 @@ impl AssemblyPlan {
             .collect();
         Self {
             self_rule: Arc::new(SelfRules::new(opts.self_order)),
+            shortfall: Arc::default(),
             disc,
             rows,
             opts,
@@ -267,9 +272,13 @@ impl AssemblyPlan {
         self.tables.get(d).and_then(|t| t.as_ref())
     }
 
-    /// Pair statistics.
+    /// Pair statistics, with the integrals filled so far that fell short of
+    /// the tolerance.
     pub fn stats(&self) -> PlanStats {
-        self.stats
+        PlanStats {
+            shortfall: self.shortfall.summary(),
+            ..self.stats
+        }
     }
 
     /// Matrix dimension N (columns; rows too unless the plan is
@@ -293,6 +302,7 @@ impl AssemblyPlan {
             self.opts.clone(),
             self.self_rule.clone(),
         )
+        .with_shortfall_log(self.shortfall.clone())
     }
 }
 

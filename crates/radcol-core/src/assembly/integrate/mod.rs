@@ -15,10 +15,13 @@
 
 use crate::kernel::g;
 use crate::mesh::Mesh;
-use crate::quadrature::{gauss::gauss_legendre01, RuleLadder, TriangleRule, MAX_RULE_DEGREE};
+use crate::quadrature::{RuleLadder, TriangleRule, MAX_RULE_DEGREE};
 use glam::DVec3;
 use std::f64::consts::FRAC_1_PI;
 use std::sync::Arc;
+
+mod self_pair;
+pub use self_pair::{SelfRules, MAX_SELF_DEPTH};
 
 /// How partly visible pairs (scenes that occlude) are integrated.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -95,27 +98,53 @@ pub struct ElementIntegrator<'a> {
     ladder: &'a RuleLadder,
     opts: QuadratureOptions,
     self_rule: Arc<SelfRules>,
+    shortfall: Option<Arc<ShortfallLog>>,
 }
 
-/// Gauss–Legendre rules on [0, 1] for self pairs: `radial` and `angular` with
-/// `self_order` points, `graded` with about half as many for each piece of a
-/// geometrically graded angular interval.
-#[derive(Clone, Debug)]
-pub struct SelfRules {
-    radial: (Vec<f64>, Vec<f64>),
-    angular: (Vec<f64>, Vec<f64>),
-    graded: (Vec<f64>, Vec<f64>),
+/// An integral that stopped at a depth limit before it met the tolerance:
+/// how many pieces did, and the closest such point–element pair.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Shortfall {
+    /// Pieces that stopped at a depth limit: a near piece at
+    /// [`QuadratureOptions::max_depth`], or a self-pair window at its own limit.
+    pub pieces: u64,
+    /// The element integrated over, in the closest such pair.
+    pub element: usize,
+    /// The point P of that pair.
+    pub point: [f64; 3],
+    /// The element P lies on, when it lies on one.
+    pub point_element: Option<usize>,
+    /// Distance from P to the centre of the piece that stopped, an upper
+    /// bound of the gap between P and the element (0 on a self pair).
+    pub distance: f64,
 }
 
-impl SelfRules {
-    /// Rules for `order` points per direction.
-    pub fn new(order: usize) -> Self {
-        let order = order.max(2);
-        Self {
-            radial: gauss_legendre01(order),
-            angular: gauss_legendre01(order),
-            graded: gauss_legendre01(order.div_ceil(2) + 2),
-        }
+/// Collects [`Shortfall`]s from integrators running in parallel.
+#[derive(Debug, Default)]
+pub struct ShortfallLog {
+    closest: std::sync::Mutex<Option<Shortfall>>,
+}
+
+impl ShortfallLog {
+    fn record(&self, p: &FieldPoint, element: usize, distance: f64) {
+        let mut closest = self.closest.lock().unwrap_or_else(|e| e.into_inner());
+        let pieces = closest.map_or(0, |c| c.pieces) + 1;
+        let here = Shortfall {
+            pieces,
+            element,
+            point: p.position.to_array(),
+            point_element: p.on_element.map(|(k, _)| k),
+            distance,
+        };
+        *closest = Some(match *closest {
+            Some(c) if c.distance <= distance => Shortfall { pieces, ..c },
+            _ => here,
+        });
+    }
+
+    /// What was recorded, if anything.
+    pub fn summary(&self) -> Option<Shortfall> {
+        *self.closest.lock().unwrap_or_else(|e| e.into_inner())
     }
 }
 
@@ -139,6 +168,20 @@ impl<'a> ElementIntegrator<'a> {
             ladder,
             opts,
             self_rule,
+            shortfall: None,
+        }
+    }
+
+    /// Records every integral that stops at a depth limit short of the
+    /// tolerance in `log`.
+    pub fn with_shortfall_log(mut self, log: Arc<ShortfallLog>) -> Self {
+        self.shortfall = Some(log);
+        self
+    }
+
+    fn note_shortfall(&self, p: &FieldPoint, element: usize, distance: f64) {
+        if let Some(log) = &self.shortfall {
+            log.record(p, element, distance);
         }
     }
 
@@ -258,7 +301,10 @@ impl<'a> ElementIntegrator<'a> {
         let dist = (p.position - centre).length();
         let degree = match far_degree(self.opts.tol, radius, dist, poly_degree, curved) {
             Some(d) => d,
-            None if depth >= self.opts.max_depth => MAX_RULE_DEGREE,
+            None if depth >= self.opts.max_depth => {
+                self.note_shortfall(p, k, dist);
+                MAX_RULE_DEGREE
+            }
             None => {
                 let [a, b, c] = tri;
                 let mid = |u: [f64; 2], v: [f64; 2]| [(u[0] + v[0]) * 0.5, (u[1] + v[1]) * 0.5];
@@ -271,97 +317,6 @@ impl<'a> ElementIntegrator<'a> {
         };
         self.apply_rule(p, k, tri, self.ladder.rule(degree), phi, out)
     }
-
-    /// Self pair: split σ at P's coordinates into three triangles with P as apex,
-    /// each integrated in Duffy coordinates (u, v) ↦ P + u (A - P) + u v (B - A).
-    ///
-    /// When P is close to the edge AB the triangle is a sliver and the integrand
-    /// has a complex near-singularity in v at distance δ = dist(P, AB) / |AB| from
-    /// the foot of the perpendicular; the v-interval is therefore split at
-    /// geometrically graded points around the foot (δ, 2δ, 4δ, …), so that each
-    /// piece sees the singularity at a distance comparable to its length.
-    fn integrate_self(
-        &self,
-        p: &FieldPoint,
-        k: usize,
-        st0: [f64; 2],
-        phi: &Integrand<'_>,
-        out: &mut [f64],
-    ) -> u64 {
-        let corners = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
-        let m = out.len();
-        let mut buf = [0.0f64; 64];
-        let mut evals = 0;
-        for e in 0..3 {
-            let (a, b) = (corners[e], corners[(e + 1) % 3]);
-            let pa = [a[0] - st0[0], a[1] - st0[1]];
-            let ab = [b[0] - a[0], b[1] - a[1]];
-            let det = (pa[0] * ab[1] - pa[1] * ab[0]).abs();
-            if det < 1e-300 {
-                continue; // P on this edge of σ: the piece has no area
-            }
-            let ab2 = ab[0] * ab[0] + ab[1] * ab[1];
-            let foot = (-(pa[0] * ab[0] + pa[1] * ab[1]) / ab2).clamp(0.0, 1.0);
-            let delta = det / ab2;
-            let breaks = graded_breaks(foot, delta);
-            let (vx, vw) = if breaks.len() > 2 {
-                &self.self_rule.graded
-            } else {
-                &self.self_rule.angular
-            };
-            let (ux, uw) = &self.self_rule.radial;
-            for w in breaks.windows(2) {
-                let (v0, v1) = (w[0], w[1]);
-                for (&x, &wv) in vx.iter().zip(vw) {
-                    for (&u, &wu) in ux.iter().zip(uw) {
-                        let wt = wu * wv;
-                        let v = v0 + (v1 - v0) * x;
-                        let st = [
-                            st0[0] + u * pa[0] + u * v * ab[0],
-                            st0[1] + u * pa[1] + u * v * ab[1],
-                        ];
-                        let q = self.mesh.point(k, st[0], st[1]);
-                        let gw = g(p.position, p.normal, q.position, q.normal)
-                            * q.jacobian
-                            * wt
-                            * (v1 - v0)
-                            * u
-                            * det
-                            * FRAC_1_PI;
-                        evals += 1;
-                        if gw == 0.0 {
-                            continue;
-                        }
-                        phi(k, st, q.position, &mut buf[..m]);
-                        for (o, val) in out.iter_mut().zip(&buf[..m]) {
-                            *o += gw * val;
-                        }
-                    }
-                }
-            }
-        }
-        evals
-    }
-}
-
-/// Break points of [0, 1] graded geometrically towards `foot`: foot ± δ 2^j.
-fn graded_breaks(foot: f64, delta: f64) -> Vec<f64> {
-    let mut pts = vec![0.0, 1.0];
-    if delta < 0.25 {
-        pts.push(foot);
-        let mut h = delta;
-        while h < 1.0 {
-            for c in [foot - h, foot + h] {
-                if c > 0.0 && c < 1.0 {
-                    pts.push(c);
-                }
-            }
-            h *= 2.0;
-        }
-    }
-    pts.sort_by(f64::total_cmp);
-    pts.dedup_by(|a, b| (*a - *b).abs() < 1e-15);
-    pts
 }
 
 /// The far-rule degree, see [`ElementIntegrator::far_degree`].
