@@ -375,6 +375,25 @@ fn magnitude_cases() -> Vec<Case> {
             &flat("1e-6"),
             Below("/channels/0/errors/global_max", 1e-8),
         ),
+        // Nodes with Lebesgue constant 3e8: LU's condition estimate (5e14)
+        // times --quad-tol bounds u's relative error by 100: a failure, after
+        // the report.
+        case(
+            "r = 6, α = 0.3 by LU",
+            &[
+                "solve", "sphere", "--level", "0", "--degree", "6", "--alpha", "0.3", "--solver",
+                "lu",
+            ],
+            Refused(
+                1,
+                &[
+                    "channel u",
+                    "cannot be trusted",
+                    "condition number is about",
+                    "--alpha auto",
+                ],
+            ),
+        ),
         case(
             "--tol 1e-20",
             &["solve", "sphere", "--level", "1", "--tol", "1e-20"],
@@ -861,6 +880,7 @@ fn every_bad_or_extreme_input_has_its_outcome() {
     .flatten()
     .collect();
     assert!(cases.len() >= 60, "{} cases", cases.len());
+    println!("{} cases", cases.len());
     let root = scratch("faults");
     let threads = std::thread::available_parallelism()
         .map_or(2, |n| n.get())

@@ -8,6 +8,7 @@ mod info;
 mod nodes;
 mod solve;
 mod study;
+mod trust;
 
 pub use adapt::{AdaptLine, AdaptReport};
 pub use compare::{ComparisonReport, DegreePart, Fastest};
@@ -16,6 +17,7 @@ pub use info::{
 };
 pub use nodes::NodesReport;
 pub use solve::{SolveReport, Written};
+pub use trust::untrusted;
 pub use study::{StudyFooter, StudyHeader, StudyLine, StudyReport};
 
 use serde::Serialize;

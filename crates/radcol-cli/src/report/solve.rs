@@ -197,7 +197,7 @@ impl SolveReport {
                 .collect(),
             out: written.to_vec(),
             adaptive: None,
-            warnings: solve_warnings(s, out),
+            warnings: super::trust::solve_warnings(s, out),
             contents: scene.map(|sc| SceneSummary {
                 triangles: sc.triangle_count(),
                 materials: sc.materials.len(),
@@ -260,7 +260,10 @@ impl SolveReport {
                         sci(g)
                     ),
                     Some(g) => format!(", ‖A‖‖u‖/‖E‖ = {}", sci(g)),
-                    None => String::new(),
+                    None => ch
+                        .solver
+                        .condition
+                        .map_or(String::new(), |k| format!(", condition κ₁ ≈ {}", sci(k))),
                 }
             )?;
             writeln!(
@@ -414,77 +417,4 @@ impl fmt::Display for SolveReport {
         }
         Ok(())
     }
-}
-
-/// Warnings about the trustworthiness of a solve: ill-conditioned
-/// interpolation (the Lebesgue constant of the nodes), quadrature that fell
-/// short of its tolerance (nearly touching surfaces), an inaccurate linear
-/// solve (the true residual), and a large estimated error. Each says what to
-/// change.
-fn solve_warnings(s: &crate::setup::Setup, out: &radcol_core::run::SolveOutcome) -> Vec<String> {
-    let mut w = Vec::new();
-    let r = s.cfg.degree;
-    if r > 0 {
-        let lebesgue = |a: f64| {
-            radcol_core::nodes::NodeSet::new(r, a).map_or(f64::INFINITY, |n| n.lebesgue_constant())
-        };
-        let here = lebesgue(s.cfg.alpha);
-        let auto = s.alpha.a0.auto_alpha();
-        let best = lebesgue(auto);
-        if here > 10.0 && here > 2.0 * best {
-            w.push(format!(
-                "α = {}: its nodes have Lebesgue constant {here:.1} (interpolation amplifies errors up to that much; \
-                 collocation near edges is stable roughly while ρ·Λ·cos²(θ/2) < 1); --alpha auto ({auto:.6}) has {best:.1}",
-                s.cfg.alpha
-            ));
-        }
-    }
-    if let Some(f) = out.plan.shortfall {
-        let [x, y, z] = f.point;
-        let on = f
-            .point_element
-            .map_or(String::new(), |k| format!(" on element {k}"));
-        w.push(format!(
-            "quadrature: {} integral pieces stopped at the subdivision limit short of --quad-tol {}; \
-             the closest: the point ({x:.6e}, {y:.6e}, {z:.6e}){on} lies within {} of element {}: surfaces that \
-             (nearly) touch there make entries near it less accurate than asked",
-            f.pieces,
-            sci(s.cfg.quad.tol),
-            sci(f.distance),
-            f.element
-        ));
-    }
-    let tol = s.cfg.gmres.rel_tol;
-    for ch in &out.channels {
-        if ch.solver.residual > (1e3 * tol).max(1e-8) {
-            w.push(format!(
-                "channel {}: the linear solve's true relative residual is {} (asked {}): the system is badly \
-                 conditioned; try a smaller α, a lower degree or --solver gmres with more --max-iters",
-                ch.name,
-                sci(ch.solver.residual),
-                sci(tol)
-            ));
-        }
-        // The quadrature error of the matrix reaches u amplified by up to the
-        // condition number (box room: 1/(1 - ρ)).
-        if let Some(g) = ch.solver.growth.filter(|&g| g * s.cfg.quad.tol > 1e-6) {
-            w.push(format!(
-                "channel {}: the system's condition number is at least {} (ρ close to 1 in a closed scene?): \
-                 quadrature errors of --quad-tol {} may reach u amplified that much; tighten --quad-tol (down to 1e-15)",
-                ch.name,
-                sci(g),
-                sci(s.cfg.quad.tol)
-            ));
-        }
-        if let Some(e) = &ch.estimate {
-            if e.max_rel > 0.1 {
-                w.push(format!(
-                    "channel {}: estimated error {} of max |u|: refine (--level, --max-edge or --target-error)",
-                    ch.name,
-                    sci(e.max_rel)
-                ));
-            }
-        }
-    }
-    w
 }

@@ -77,6 +77,9 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
     let mut report = SolveReport::new(&s, &out, &written);
     report.adaptive = adaptive;
     report::emit(w, &report, s.json)?;
+    if let Some(why) = report::untrusted(&s, &out) {
+        return Err(anyhow::anyhow!(why));
+    }
     match unmet {
         Some(why) if job.strict => Err(anyhow::anyhow!("--strict: {why}")),
         _ => Ok(()),

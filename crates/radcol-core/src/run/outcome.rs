@@ -43,9 +43,20 @@ pub struct SolverReport {
     /// GMRES's ‖A‖ ‖x‖ / ‖b‖, a lower bound of the condition number
     /// ([`crate::solve::GmresInfo::growth`]); None for LU.
     pub growth: Option<f64>,
+    /// LU's estimate of the condition number κ₁(A)
+    /// ([`crate::solve::DenseLu::condition_estimate`]); None for GMRES.
+    pub condition: Option<f64>,
     /// GMRES stopped at the rounding floor of the system, above `--tol`
     /// ([`crate::solve::ROUNDING_FLOOR`]).
     pub at_rounding_floor: bool,
+}
+
+impl SolverReport {
+    /// What is known of the condition number: LU's estimate of κ₁, else
+    /// GMRES's lower bound.
+    pub fn conditioning(&self) -> Option<f64> {
+        self.condition.or(self.growth)
+    }
 }
 
 /// One channel's result.

@@ -32,7 +32,7 @@ fn solve_channels(
     guess: Option<&[Vec<f64>]>,
 ) -> Result<Vec<ChannelResult>, Error> {
     let mut channels = Vec::new();
-    let mut lu_cache: Option<(Vec<f64>, DenseLu)> = None;
+    let mut lu_cache: Option<(Vec<f64>, DenseLu, f64)> = None;
     if let Some(p) = &cfg.progress {
         p.start("solve", problem.channels.len() as u64);
     }
@@ -42,18 +42,25 @@ fn solve_channels(
             Some(g) if g.len() == emission.len() => g.clone(),
             _ => emission.clone(),
         };
-        let (iterations, growth, at_rounding_floor) = match cfg.solver {
+        let (iterations, growth, condition, at_rounding_floor) = match cfg.solver {
             SolverKind::Gmres => {
                 let info = gmres(&op, &emission, &mut x, &cfg.gmres)?;
-                (info.iterations, Some(info.growth), info.at_rounding_floor)
+                (
+                    info.iterations,
+                    Some(info.growth),
+                    None,
+                    info.at_rounding_floor,
+                )
             }
             SolverKind::Lu => {
-                if lu_cache.as_ref().is_none_or(|(r, _)| *r != rho) {
-                    lu_cache = Some((rho.clone(), DenseLu::factor(&op.to_dense())?));
+                if lu_cache.as_ref().is_none_or(|(r, _, _)| *r != rho) {
+                    let lu = DenseLu::factor(&op.to_dense())?;
+                    let kappa = lu.condition_estimate();
+                    lu_cache = Some((rho.clone(), lu, kappa));
                 }
-                let (_, lu) = lu_cache.as_ref().expect("just built");
+                let (_, lu, kappa) = lu_cache.as_ref().expect("just built");
                 lu.solve_in_place(&mut x)?;
-                (0, None, false)
+                (0, None, Some(*kappa), false)
             }
         };
         let residual = true_residual(&op, &x, &emission);
@@ -74,6 +81,7 @@ fn solve_channels(
                 iterations,
                 residual,
                 growth,
+                condition,
                 at_rounding_floor,
             },
             errors: None,

@@ -36,6 +36,8 @@ pub struct DenseLu {
     perm: Perm<usize>,
     /// Index of the smallest `|U_ii|`: reported if a solve overflows.
     min_pivot: usize,
+    /// ‖A‖₁, the largest column sum of |a_ij|: for the condition estimate.
+    norm1: f64,
     par: Par,
 }
 
@@ -71,6 +73,26 @@ impl DenseLu {
             return Err(SolveError::NonFinite);
         }
         let par = Par::rayon(0);
+        let norm1 = (0..n)
+            .into_par_iter()
+            .fold(
+                || vec![0.0f64; n],
+                |mut sums, i| {
+                    sums.iter_mut()
+                        .zip(a.row(i))
+                        .for_each(|(s, v)| *s += v.abs());
+                    sums
+                },
+            )
+            .reduce(
+                || vec![0.0f64; n],
+                |mut x, y| {
+                    x.iter_mut().zip(y).for_each(|(a, b)| *a += b);
+                    x
+                },
+            )
+            .into_iter()
+            .fold(0.0, f64::max);
 
         // Row-major -> column-major, in parallel over column blocks.
         let mut lu = Mat::<f64>::zeros(n, n);
@@ -118,6 +140,7 @@ impl DenseLu {
             lu,
             perm,
             min_pivot,
+            norm1,
             par,
         })
     }
@@ -168,6 +191,88 @@ impl DenseLu {
             });
         }
         unscale(b, scale)
+    }
+
+    /// An estimate of the condition number κ₁(A) = ‖A‖₁ ‖A⁻¹‖₁, from a few
+    /// solves with the factors (Hager's method with Higham's refinements, as
+    /// in LAPACK's `dlacon`: at most 5 steps of a power-like iteration on
+    /// ‖A⁻¹ x‖₁ over the unit ball's vertices, and an alternating test
+    /// vector that guards against its rare failures). It is a lower bound of
+    /// κ₁ that is almost always within a factor 3 of it, at the cost of
+    /// about 12 triangular solve pairs, O(n²) against the O(n³) factoring.
+    /// A relative perturbation δ of A (quadrature error) can change the
+    /// solution by up to about κ δ.
+    pub fn condition_estimate(&self) -> f64 {
+        let n = self.dim();
+        if n == 0 {
+            return 1.0;
+        }
+        let norm1 = |v: &[f64]| v.iter().map(|x| x.abs()).sum::<f64>();
+        let sign = |v: &[f64]| -> Vec<f64> {
+            v.iter()
+                .map(|&x| if x >= 0.0 { 1.0 } else { -1.0 })
+                .collect()
+        };
+        let mut x = vec![1.0 / n as f64; n];
+        self.raw_solve(&mut x, false);
+        let mut est = norm1(&x);
+        let mut xi = sign(&x);
+        let mut z = xi.clone();
+        self.raw_solve(&mut z, true);
+        let mut last = usize::MAX;
+        for _ in 0..5 {
+            let j = (0..n).fold(0, |b, i| if z[i].abs() > z[b].abs() { i } else { b });
+            if j == last {
+                break; // the same vertex again: converged
+            }
+            last = j;
+            let mut y = vec![0.0; n];
+            y[j] = 1.0;
+            self.raw_solve(&mut y, false);
+            let new = norm1(&y);
+            let s = sign(&y);
+            if new <= est || s == xi {
+                est = est.max(new);
+                break;
+            }
+            est = new;
+            xi = s;
+            z.clone_from(&xi);
+            self.raw_solve(&mut z, true);
+        }
+        // Higham's alternating vector with growing entries.
+        let mut alt: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = 1.0 + i as f64 / (n.max(2) - 1) as f64;
+                if i % 2 == 0 {
+                    t
+                } else {
+                    -t
+                }
+            })
+            .collect();
+        self.raw_solve(&mut alt, false);
+        est = est.max(2.0 * norm1(&alt) / (3.0 * n as f64));
+        self.norm1 * est
+    }
+
+    /// Solves A x = b (or Aᵀ x = b) in place with the factors, unchecked.
+    fn raw_solve(&self, b: &mut [f64], transpose: bool) {
+        let n = self.dim();
+        let rhs = MatMut::from_column_major_slice_mut(b, n, 1);
+        let scratch = if transpose {
+            solve::solve_transpose_in_place_scratch::<usize, f64>(n, 1, self.par)
+        } else {
+            solve::solve_in_place_scratch::<usize, f64>(n, 1, self.par)
+        };
+        let mut buffer = MemBuffer::new(scratch);
+        let stack = MemStack::new(&mut buffer);
+        let (l, u) = (self.lu.as_ref(), self.lu.as_ref());
+        if transpose {
+            solve::solve_transpose_in_place(l, u, self.perm.as_ref(), rhs, self.par, stack);
+        } else {
+            solve::solve_in_place(l, u, self.perm.as_ref(), rhs, self.par, stack);
+        }
     }
 
     /// Dimension `n` of the factored `n × n` matrix.
@@ -251,6 +356,43 @@ mod tests {
         lu.solve_in_place(&mut b).unwrap();
         for (got, want) in b.iter().zip([1.0, 2.0, 3.0]) {
             crate::assert_close!(got, want, 1e-14, "{b:?}");
+        }
+    }
+
+    #[test]
+    fn condition_estimate_matches_closed_forms() {
+        // Diagonal: κ₁ = max |d| / min |d| exactly.
+        let d = DenseMatrix::from_row_major(3, 3, vec![1.0, 0., 0., 0., 1e-3, 0., 0., 0., -10.0]);
+        let k = DenseLu::factor(&d).unwrap().condition_estimate();
+        crate::assert_close!(k, 1e4, 1e-12 * 1e4, "diagonal");
+        // Hilbert matrices, whose inverses have integer entries in closed
+        // form: (H⁻¹)_ij = (-1)^(i+j) (i+j-1) C(n+i-1, n-j) C(n+j-1, n-i)
+        // C(i+j-2, i-1)² (1-based). The estimate is a lower bound, and
+        // within a factor 3 in practice.
+        let binom = |n: u64, k: u64| (1..=k).fold(1.0f64, |c, i| c * (n + 1 - i) as f64 / i as f64);
+        for n in [4usize, 6, 8] {
+            let h: Vec<f64> = (0..n * n)
+                .map(|e| 1.0 / ((e / n + e % n) as f64 + 1.0))
+                .collect();
+            let norm1 = |m: &dyn Fn(usize, usize) -> f64| {
+                (0..n)
+                    .map(|j| (0..n).map(|i| m(i, j).abs()).sum::<f64>())
+                    .fold(0.0, f64::max)
+            };
+            let inv = |i: usize, j: usize| {
+                let (i, j, n) = ((i + 1) as u64, (j + 1) as u64, n as u64);
+                (i + j - 1) as f64
+                    * binom(n + i - 1, n - j)
+                    * binom(n + j - 1, n - i)
+                    * binom(i + j - 2, i - 1).powi(2)
+            };
+            let exact = norm1(&|i, j| h[i * n + j]) * norm1(&inv);
+            let lu = DenseLu::factor(&DenseMatrix::from_row_major(n, n, h.clone())).unwrap();
+            let k = lu.condition_estimate();
+            assert!(
+                k <= exact * (1.0 + 1e-6) && k >= exact / 3.0,
+                "n = {n}: {k:e} against {exact:e}"
+            );
         }
     }
 
