@@ -47,6 +47,10 @@ pub fn with_flags(err: CoreError) -> anyhow::Error {
         CoreError::Input(e @ InputError::TooLarge { .. }) => {
             bad_input(format!("{e} (flags: --level, --max-edge, --degree)")).into()
         }
+        CoreError::Input(e @ InputError::PeakTooLarge { .. }) => bad_input(format!(
+            "{e} (flags: --level, --max-edge, --degree, --no-estimate, --solver gmres)"
+        ))
+        .into(),
         // Values of the scalar problem's fields come from these flags (a
         // scene's per-channel ones, "reflectivity R", from its materials).
         CoreError::Input(e @ InputError::Reflectivity { name, .. }) if name == "reflectivity" => {

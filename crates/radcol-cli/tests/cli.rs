@@ -1144,3 +1144,40 @@ fn error_map_shows_the_estimate() {
         &["--error-map", "--no-estimate"],
     );
 }
+
+/// The memory predicted once the plan is built (resident then + matrix +
+/// the larger of the solver's and the estimate's working memory) is within
+/// 10 % of the process's measured high-water mark, on the Cornell box at
+/// three sizes and with both solvers (Linux: VmHWM).
+#[test]
+fn predicted_peak_memory_is_within_ten_percent_of_the_measured_one() {
+    if !std::path::Path::new("/proc/self/status").exists() {
+        return; // nothing measured to compare with
+    }
+    for (max_edge, solver) in [("300", "gmres"), ("150", "lu"), ("120", "gmres")] {
+        let out = radcol_ok(&[
+            "solve",
+            "cornell",
+            "--max-edge",
+            max_edge,
+            "--solver",
+            solver,
+            "--json",
+        ]);
+        let j = stdout_json(&out);
+        let m = &j["memory"];
+        let (predicted, measured) = (
+            num(m, "predicted_peak_bytes"),
+            num(m, "measured_peak_bytes"),
+        );
+        let ratio = predicted / measured;
+        println!("--max-edge {max_edge} {solver}: predicted {predicted:e}, measured {measured:e}, {ratio:.3}");
+        assert!(
+            (ratio - 1.0).abs() <= 0.1,
+            "--max-edge {max_edge} {solver}: {ratio}"
+        );
+        // At these sizes the plan's partly visible pairs weigh as much as
+        // the matrix: a prediction of the matrix alone would be far off.
+        assert!(num(m, "matrix_bytes") < 0.6 * measured, "{m}");
+    }
+}

@@ -67,6 +67,21 @@ pub enum InputError {
         /// Bytes available.
         bytes_available: u64,
     },
+    /// The solve's peak, predicted once its plan is built, would not fit in
+    /// the memory available ([`crate::run::MemoryUse`]).
+    #[error("the solve would need {} more memory at its peak (matrix {}, then {} for the linear solver or {} for the error estimate, the larger), but {} is available; use a coarser mesh or a lower degree, or skip the estimate", gib(*to_come), gib(*matrix), gib(*solver), gib(*estimate), gib(*available as f64))]
+    PeakTooLarge {
+        /// Bytes still to be allocated at the peak.
+        to_come: f64,
+        /// Of which the geometric matrix.
+        matrix: f64,
+        /// The linear solver's working memory.
+        solver: f64,
+        /// The error estimate's working memory.
+        estimate: f64,
+        /// Bytes available.
+        available: u64,
+    },
     /// A maximum edge length that is not a positive finite number.
     #[error("max edge length {value} must be a positive finite number (scene units)")]
     MaxEdge {

@@ -108,6 +108,9 @@ pub struct SolveReport {
     backend: BackendInfo,
     solver: Option<SolverReport>,
     timings: Timings,
+    /// Predicted and measured memory (the peak measured when the report is
+    /// made, outputs written).
+    memory: radcol_core::run::MemoryUse,
     assembly: AssemblyWork,
     visibility: VisibilityAnalysis,
     materials: Option<Vec<MaterialShort>>,
@@ -195,6 +198,7 @@ impl SolveReport {
                     limited: c.limited.as_ref().map(|(_, l)| l.clone()),
                 })
                 .collect(),
+            memory: out.memory.measured(),
             out: written.to_vec(),
             adaptive: None,
             warnings: super::trust::solve_warnings(s, out),
@@ -405,6 +409,20 @@ impl fmt::Display for SolveReport {
             secs(t.estimate_s),
             secs(t.total_s)
         )?;
+        let m = &self.memory;
+        if let Some(peak) = m.measured_peak_bytes {
+            let gb = |b: f64| format!("{:.3} GB", b / 1e9);
+            writeln!(
+                f,
+                "  memory      peak {} measured, {} predicted after planning (resident {} + matrix {} + max(solver {}, estimate {}))",
+                gb(peak),
+                gb(m.predicted_peak_bytes),
+                gb(m.after_plan_bytes),
+                gb(m.matrix_bytes),
+                gb(m.solver_bytes),
+                gb(m.estimate_bytes)
+            )?;
+        }
         if let Some(a) = &self.adaptive {
             write!(f, "{a}")?;
         }

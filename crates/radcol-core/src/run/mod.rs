@@ -23,4 +23,6 @@ pub use config::{SolveConfig, SolverKind};
 pub use inputs::{check_size, discretize, MAX_EXTENT, MIN_EXTENT};
 pub use outcome::{ChannelResult, SolveOutcome, SolverReport, Timings};
 pub use pipeline::{solve, solve_on_mesh, true_residual};
-pub use size::{available_memory, elements, mesh_size, MemoryEstimate, MeshSize};
+pub use size::{
+    available_memory, elements, mesh_size, process_memory, MemoryEstimate, MemoryUse, MeshSize,
+};

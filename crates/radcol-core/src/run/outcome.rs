@@ -107,6 +107,8 @@ pub struct SolveOutcome {
     pub backend: BackendInfo,
     /// Pair statistics of the plan.
     pub plan: PlanStats,
+    /// Predicted and measured memory ([`super::MemoryUse`]).
+    pub memory: super::MemoryUse,
     /// Whether visibility was modelled, and why.
     pub visibility: VisibilityAnalysis,
     /// Kernel evaluations of the assembly.

@@ -1,7 +1,7 @@
 //! The stages of one solve (see the module overview in [`super`]).
 
 use super::inputs::{check_quadrature, discretize, fields, NodalFields};
-use super::size::{available_memory, MemoryEstimate};
+use super::size::{available_memory, MemoryEstimate, MemoryUse};
 use super::{ChannelResult, SolveConfig, SolveOutcome, SolverKind, SolverReport, Timings};
 use crate::assembly::QuadratureOptions;
 use crate::assembly::{Assembled, AssemblyBackend, AssemblyPlan, Unchanged};
@@ -54,7 +54,10 @@ fn solve_channels(
             }
             SolverKind::Lu => {
                 if lu_cache.as_ref().is_none_or(|(r, _, _)| *r != rho) {
-                    let lu = DenseLu::factor(&op.to_dense())?;
+                    // The old factors go first: a channel with other ρ
+                    // (Cornell's green after red) held two copies at once.
+                    drop(lu_cache.take());
+                    let lu = DenseLu::factor_radiosity(&op)?;
                     let kappa = lu.condition_estimate();
                     lu_cache = Some((rho.clone(), lu, kappa));
                 }
@@ -129,8 +132,10 @@ fn assemble(
     visibility: &VisibilityAnalysis,
     backend: &dyn AssemblyBackend,
     previous: Option<&Previous<'_>>,
-) -> Result<(AssemblyPlan, Assembled), Error> {
+    keep_check: bool,
+) -> Result<(AssemblyPlan, Assembled, MemoryUse), Error> {
     let progress = cfg.progress.clone();
+    let before = super::size::process_memory().map(|(rss, _)| rss);
     let plan = match previous {
         Some(p) => AssemblyPlan::updating(
             disc.clone(),
@@ -142,6 +147,24 @@ fn assemble(
         ),
         None => AssemblyPlan::with_progress(disc.clone(), cfg.quad.clone(), visibility, progress),
     };
+    // What building the plan cost the process (its heap with the
+    // allocator's overhead: 25 % more on Cornell), where that is measured.
+    let plan_cost = match (before, super::size::process_memory()) {
+        (Some(b), Some((after, _))) => plan.heap_bytes().max(after.saturating_sub(b)),
+        _ => plan.heap_bytes(),
+    };
+    let memory = MemoryUse::predict(
+        disc.len(),
+        plan_cost,
+        cfg.solver,
+        cfg.gmres.restart,
+        cfg.estimate,
+        disc.mesh().len() * crate::nodes::nodes_per_element(disc.nodes().degree() + 1),
+        keep_check,
+    );
+    if cfg.check_memory {
+        memory.check(available_memory())?;
+    }
     if let Some(p) = &cfg.progress {
         p.start("assembly", disc.mesh().len() as u64);
     }
@@ -149,7 +172,7 @@ fn assemble(
         Some(p) => backend.assemble_reusing(&plan, &p.outcome.matrix)?,
         None => backend.assemble(&plan)?,
     };
-    Ok((plan, assembled))
+    Ok((plan, assembled, memory))
 }
 
 /// Estimates every channel's error at the check points of its mesh
@@ -295,7 +318,14 @@ impl Stages<'_> {
         let rhs_s = t.elapsed().as_secs_f64();
 
         let t = Instant::now();
-        let (plan, assembled) = assemble(&disc, cfg, &visibility, self.backend, self.previous)?;
+        let (plan, assembled, memory) = assemble(
+            &disc,
+            cfg,
+            &visibility,
+            self.backend,
+            self.previous,
+            self.keep_check,
+        )?;
         let assembly_s = t.elapsed().as_secs_f64();
 
         let t = Instant::now();
@@ -331,6 +361,7 @@ impl Stages<'_> {
             h,
             backend: self.backend.info(),
             plan: plan.stats(),
+            memory: memory.measured(),
             visibility,
             kernel_evals: assembled.kernel_evals,
             device_seconds: assembled.device_seconds,

@@ -112,3 +112,149 @@ impl MemoryEstimate {
         })
     }
 }
+
+/// This process's resident memory now and its high-water mark so far
+/// (VmRSS and VmHWM of /proc/self/status, Linux), bytes.
+pub fn process_memory() -> Option<(u64, u64)> {
+    let text = std::fs::read_to_string("/proc/self/status").ok()?;
+    let field = |name: &str| {
+        text.lines()
+            .find(|l| l.starts_with(name))
+            .and_then(|l| l.split_whitespace().nth(1))
+            .and_then(|kb| kb.parse::<u64>().ok())
+            .map(|kb| kb * 1024)
+    };
+    Some((field("VmRSS:")?, field("VmHWM:")?))
+}
+
+/// One solve's memory: predicted once its plan is built, from what the
+/// process holds then (measured) and what is still to come (counted), and
+/// the high-water mark measured at its end.
+///
+/// The peak comes after the matrix is filled: either while the linear
+/// solver runs (LU's factors, one more n × n copy; GMRES's Krylov basis) or
+/// while the error estimate runs (its plan, pairing the check points with
+/// the same elements, about as large as the solve's; and with `keep_check`,
+/// its check rows), whichever is larger.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct MemoryUse {
+    /// Resident bytes once the plan was built (scene, mesh, visibility,
+    /// plan, fields); 0 where the platform does not say.
+    pub after_plan_bytes: f64,
+    /// What building the plan cost (its heap, or the growth of the resident
+    /// set while it was built where that is larger: allocator overhead).
+    pub plan_bytes: f64,
+    /// 8 N² bytes of the geometric matrix.
+    pub matrix_bytes: f64,
+    /// The linear solver's working memory.
+    pub solver_bytes: f64,
+    /// The error estimate's working memory.
+    pub estimate_bytes: f64,
+    /// after_plan + matrix + max(solver, estimate).
+    pub predicted_peak_bytes: f64,
+    /// The process's measured high-water mark at the end of the solve.
+    pub measured_peak_bytes: Option<f64>,
+}
+
+impl MemoryUse {
+    /// The prediction for N `unknowns`, a plan of `plan_bytes`, `solver`
+    /// (with GMRES's `restart`), and the estimate when `estimate` (keeping
+    /// `check_rows` rows of N when `keep_check`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn predict(
+        unknowns: usize,
+        plan_bytes: u64,
+        solver: SolverKind,
+        restart: usize,
+        estimate: bool,
+        check_rows: usize,
+        keep_check: bool,
+    ) -> Self {
+        let n = unknowns as f64;
+        let after_plan_bytes = process_memory().map_or(0.0, |(rss, _)| rss as f64);
+        let matrix_bytes = 8.0 * n * n;
+        let solver_bytes = match solver {
+            SolverKind::Lu => matrix_bytes,
+            SolverKind::Gmres => 8.0 * n * (restart as f64 + 4.0),
+        };
+        let estimate_bytes = if estimate {
+            plan_bytes as f64
+                + if keep_check {
+                    8.0 * check_rows as f64 * n
+                } else {
+                    0.0
+                }
+        } else {
+            0.0
+        };
+        Self {
+            after_plan_bytes,
+            plan_bytes: plan_bytes as f64,
+            matrix_bytes,
+            solver_bytes,
+            estimate_bytes,
+            predicted_peak_bytes: after_plan_bytes
+                + matrix_bytes
+                + solver_bytes.max(estimate_bytes),
+            measured_peak_bytes: None,
+        }
+    }
+
+    /// Refuses, with the figures, when what is still to come exceeds the
+    /// nine tenths of `available` bytes that the dense matrices may take.
+    pub fn check(&self, available: Option<u64>) -> Result<(), InputError> {
+        let to_come = self.predicted_peak_bytes - self.after_plan_bytes;
+        match available {
+            Some(a) if to_come > (a / 10 * 9) as f64 => Err(InputError::PeakTooLarge {
+                to_come,
+                matrix: self.matrix_bytes,
+                solver: self.solver_bytes,
+                estimate: self.estimate_bytes,
+                available: a,
+            }),
+            _ => Ok(()),
+        }
+    }
+
+    /// Records the process's high-water mark now.
+    pub fn measured(self) -> Self {
+        Self {
+            measured_peak_bytes: process_memory().map(|(_, hwm)| hwm as f64),
+            ..self
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_peak_is_the_matrix_and_the_larger_of_solver_and_estimate() {
+        // N = 1000: 8 MB of matrix; LU 8 MB more; GMRES (restart 30) 34·8 kB.
+        let lu = MemoryUse::predict(1000, 5_000_000, SolverKind::Lu, 30, true, 2000, false);
+        let to_come = lu.predicted_peak_bytes - lu.after_plan_bytes;
+        assert_eq!(
+            (lu.matrix_bytes, lu.solver_bytes, lu.estimate_bytes),
+            (8e6, 8e6, 5e6)
+        );
+        assert_eq!(to_come, 16e6);
+        let gm = MemoryUse::predict(1000, 5_000_000, SolverKind::Gmres, 30, true, 2000, true);
+        // The estimate's plan and its 2000 kept check rows win over GMRES.
+        assert_eq!(gm.estimate_bytes, 5e6 + 16e6);
+        assert_eq!(gm.predicted_peak_bytes - gm.after_plan_bytes, 8e6 + 21e6);
+        let none = MemoryUse::predict(1000, 5_000_000, SolverKind::Gmres, 30, false, 2000, true);
+        assert_eq!(
+            none.predicted_peak_bytes - none.after_plan_bytes,
+            8e6 + 8.0 * 1000.0 * 34.0
+        );
+        // Refused when it exceeds 0.9 of what is available, with the figures.
+        assert!(lu.check(Some(18_000_000)).is_ok());
+        let err = lu.check(Some(17_000_000)).unwrap_err().to_string();
+        assert!(
+            err.contains("0.01 GiB more memory") && err.contains("skip the estimate"),
+            "{err}"
+        );
+        assert!(lu.check(None).is_ok());
+    }
+}

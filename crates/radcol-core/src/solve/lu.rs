@@ -69,45 +69,60 @@ impl DenseLu {
                 found: a.ncols(),
             });
         }
-        if !a.as_slice().par_iter().all(|v| v.is_finite()) {
-            return Err(SolveError::NonFinite);
-        }
-        let par = Par::rayon(0);
-        let norm1 = (0..n)
-            .into_par_iter()
-            .fold(
-                || vec![0.0f64; n],
-                |mut sums, i| {
-                    sums.iter_mut()
-                        .zip(a.row(i))
-                        .for_each(|(s, v)| *s += v.abs());
-                    sums
-                },
-            )
-            .reduce(
-                || vec![0.0f64; n],
-                |mut x, y| {
-                    x.iter_mut().zip(y).for_each(|(a, b)| *a += b);
-                    x
-                },
-            )
-            .into_iter()
-            .fold(0.0, f64::max);
+        Self::factor_rows(n, |i, j0, out| {
+            out.copy_from_slice(&a.row(i)[j0..j0 + out.len()])
+        })
+    }
 
-        // Row-major -> column-major, in parallel over column blocks.
+    /// Factors `I - diag(ρ) Gm` of `op` without forming it first: the
+    /// factors are the only n × n copy besides Gm (LU used to peak at three).
+    ///
+    /// # Errors
+    /// As [`factor`](Self::factor).
+    pub fn factor_radiosity(op: &super::RadiosityOperator<'_>) -> Result<Self, SolveError> {
+        let (gm, rho) = (op.gm, op.rho);
+        Self::factor_rows(gm.nrows(), |i, j0, out| {
+            for (o, &g) in out.iter_mut().zip(&gm.row(i)[j0..]) {
+                *o = -rho[i] * g;
+            }
+            if (j0..j0 + out.len()).contains(&i) {
+                out[i - j0] += 1.0;
+            }
+        })
+    }
+
+    /// Factors the n × n matrix whose row i, columns j0.., `block(i, j0,
+    /// out)` writes into `out`.
+    fn factor_rows(
+        n: usize,
+        block: impl Fn(usize, usize, &mut [f64]) + Sync,
+    ) -> Result<Self, SolveError> {
+        let par = Par::rayon(0);
+        // Row-major -> column-major, in parallel over column blocks, with
+        // the column sums of |a_ij| for ‖A‖₁.
         let mut lu = Mat::<f64>::zeros(n, n);
-        lu.par_col_chunks_mut(TRANSPOSE_BLOCK)
+        let col_sums: Vec<f64> = lu
+            .par_col_chunks_mut(TRANSPOSE_BLOCK)
             .enumerate()
-            .for_each(|(blk, mut cols)| {
+            .flat_map_iter(|(blk, mut cols)| {
                 let j0 = blk * TRANSPOSE_BLOCK;
                 let w = cols.ncols();
+                let mut src = [0.0f64; TRANSPOSE_BLOCK];
+                let mut sums = vec![0.0f64; w];
                 for i in 0..n {
-                    let src = &a.row(i)[j0..j0 + w];
-                    for (jj, &v) in src.iter().enumerate() {
+                    block(i, j0, &mut src[..w]);
+                    for (jj, &v) in src[..w].iter().enumerate() {
                         cols[(i, jj)] = v;
+                        sums[jj] += v.abs();
                     }
                 }
-            });
+                sums
+            })
+            .collect();
+        if !col_sums.iter().all(|v| v.is_finite()) {
+            return Err(SolveError::NonFinite);
+        }
+        let norm1 = col_sums.into_iter().fold(0.0, f64::max);
 
         let mut fwd = vec![0usize; n];
         let mut bwd = vec![0usize; n];
@@ -394,6 +409,27 @@ mod tests {
                 "n = {n}: {k:e} against {exact:e}"
             );
         }
+    }
+
+    #[test]
+    fn radiosity_factors_equal_those_of_the_formed_matrix() {
+        let n = 37; // not a multiple of the transpose block
+        let g: Vec<f64> = (0..n * n)
+            .map(|e| ((e * 7919 % 101) as f64 / 101.0) / n as f64)
+            .collect();
+        let g = DenseMatrix::from_row_major(n, n, g);
+        let rho: Vec<f64> = (0..n).map(|i| 0.3 + 0.6 * (i as f64 / n as f64)).collect();
+        let op = crate::solve::RadiosityOperator::new(&g, &rho).unwrap();
+        let (direct, formed) = (
+            DenseLu::factor_radiosity(&op).unwrap(),
+            DenseLu::factor(&op.to_dense()).unwrap(),
+        );
+        let b: Vec<f64> = (0..n).map(|i| (i as f64).sin()).collect();
+        let (mut x, mut y) = (b.clone(), b);
+        direct.solve_in_place(&mut x).unwrap();
+        formed.solve_in_place(&mut y).unwrap();
+        assert_eq!(x, y);
+        assert_eq!(direct.condition_estimate(), formed.condition_estimate());
     }
 
     #[test]

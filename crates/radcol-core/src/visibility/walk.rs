@@ -20,6 +20,11 @@ pub(crate) struct PartialRow {
 }
 
 impl PartialRow {
+    /// Bytes held on the heap.
+    pub(crate) fn heap_bytes(&self) -> usize {
+        self.elements.capacity() * 4 + self.ranges.capacity() * 8 + self.candidates.capacity() * 4
+    }
+
     /// This row's pairs whose element `map` sends to a new index (the
     /// others dropped), with their candidates; `map` must keep the order.
     pub(crate) fn remapped(&self, map: impl Fn(usize) -> Option<usize>) -> PartialRow {
