@@ -445,6 +445,11 @@ fn flag_cases() -> Vec<Case> {
             Says(&["more than 4194304 (counting stopped there)"]),
         ),
         case(
+            "info --json --max-edge 1e-9",
+            &["info", "sphere", "--max-edge", "1e-9"],
+            Answer("/counted_up_to", 4194304.0, 0.0),
+        ),
+        case(
             "--target-error 0",
             &["solve", "sphere", "--target-error", "0"],
             Refused(2, &["--target-error", "(0, 1)"]),
@@ -501,7 +506,7 @@ fn flag_cases() -> Vec<Case> {
                 "--camera",
                 "0,0,0,0,0,0,0,0,1,40",
             ],
-            Refused(2, &["--camera", "coincide"]),
+            Refused(2, &["--camera: eye and target coincide"]),
         ),
         case(
             "--out in /proc",

@@ -17,8 +17,13 @@ pub struct InfoReport {
     pub max_edge: Option<f64>,
     /// Degree asked for.
     pub degree: usize,
-    /// Elements at `level`.
+    /// Elements at `level` (JSON: null when counting stopped, see
+    /// `counted_up_to`).
+    #[serde(serialize_with = "counted")]
     pub elements: u64,
+    /// When the count with a maximum edge stopped: the element count it
+    /// stopped at (there are more).
+    pub counted_up_to: Option<u64>,
     /// Patches.
     pub patches: usize,
     /// Base triangles (level 0 elements).
@@ -35,7 +40,8 @@ pub struct InfoReport {
     pub bounding_box: BoundingBox,
     /// The level whose mesh was built (below `level` when that mesh is too big to build).
     pub measured_level: u32,
-    /// Unknowns N at `degree` and `level`.
+    /// Unknowns N at `degree` and `level` (JSON: null when counting stopped).
+    #[serde(serialize_with = "counted")]
     pub unknowns: u64,
     /// Memory of the dense matrices.
     pub memory: MemoryEstimate,
@@ -312,5 +318,14 @@ impl fmt::Display for Estimate {
             e.gmres_flops_per_iteration,
             e.lu_flops
         )
+    }
+}
+
+/// A count, or null where counting stopped (`u64::MAX`).
+fn counted<S: serde::Serializer>(v: &u64, s: S) -> Result<S::Ok, S::Error> {
+    if *v == u64::MAX {
+        s.serialize_none()
+    } else {
+        s.serialize_u64(*v)
     }
 }

@@ -17,8 +17,8 @@ pub use info::{
 };
 pub use nodes::NodesReport;
 pub use solve::{SolveReport, Written};
-pub use trust::untrusted;
 pub use study::{StudyFooter, StudyHeader, StudyLine, StudyReport};
+pub use trust::untrusted;
 
 use serde::Serialize;
 use std::fmt::Display;

@@ -33,7 +33,10 @@ pub fn untrusted(s: &crate::setup::Setup, out: &radcol_core::run::SolveOutcome) 
 /// short of its tolerance (nearly touching surfaces), an inaccurate linear
 /// solve (the true residual), and a large estimated error. Each says what to
 /// change.
-pub fn solve_warnings(s: &crate::setup::Setup, out: &radcol_core::run::SolveOutcome) -> Vec<String> {
+pub fn solve_warnings(
+    s: &crate::setup::Setup,
+    out: &radcol_core::run::SolveOutcome,
+) -> Vec<String> {
     let mut w = Vec::new();
     let r = s.cfg.degree;
     if r > 0 {

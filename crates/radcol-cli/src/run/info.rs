@@ -96,6 +96,8 @@ fn info_report(job: &Refinement, loaded: &Loaded) -> InfoReport {
         max_edge: job.max_edge,
         degree: job.degree,
         elements,
+        counted_up_to: (elements == u64::MAX && job.max_edge.is_some())
+            .then_some(radcol_core::mesh::MAX_EDGE_COUNT_CAP),
         patches: job.surface.patches.len(),
         base_triangles: job.surface.base_triangle_count(),
         h: mesh.h() / shrink,

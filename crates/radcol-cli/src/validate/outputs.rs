@@ -145,7 +145,15 @@ pub(super) fn look(a: &SolveArgs) -> Result<LookSpec, BadInput> {
     let camera = a
         .camera
         .as_deref()
-        .map(|text| Camera::parse(text).map_err(|e| bad_input(format!("--camera: {e}"))))
+        .map(|text| {
+            // The library's messages start "camera: "; the flag says it here.
+            Camera::parse(text).map_err(|e| {
+                bad_input(format!(
+                    "--camera: {}",
+                    e.strip_prefix("camera: ").unwrap_or(&e)
+                ))
+            })
+        })
         .transpose()?;
     for (flag, v) in [
         ("--width", a.width),
