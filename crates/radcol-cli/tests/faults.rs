@@ -437,12 +437,27 @@ fn flag_cases() -> Vec<Case> {
         case(
             "--max-edge 1e-9",
             &["solve", "sphere", "--max-edge", "1e-9"],
-            Refused(2, &["more than 4 million"]),
+            Refused(
+                2,
+                &[
+                    "more than 4 million",
+                    "this run: --level 2 --max-edge",
+                    "unknowns fit: --max-edge",
+                ],
+            ),
         ),
         case(
             "info --max-edge 1e-9",
             &["info", "sphere", "--max-edge", "1e-9"],
             Says(&["more than 4194304 (counting stopped there)"]),
+        ),
+        case(
+            "--level 12",
+            &["solve", "sphere", "--level", "12", "--degree", "2"],
+            Refused(
+                2,
+                &["this run: --level 12 --degree 2", "unknowns fit: --level"],
+            ),
         ),
         case(
             "info --json --max-edge 1e-9",

@@ -151,10 +151,14 @@ fn need(unknowns: u64, matrix: f64, lu: f64) -> String {
     if unknowns == u64::MAX {
         "more than 4 million unknowns (counting stopped there) need a dense matrix of more than 100 TiB".into()
     } else {
+        let lu = if lu > 0.0 {
+            format!(" (plus {} for an LU copy)", gib(lu))
+        } else {
+            String::new()
+        };
         format!(
-            "{unknowns} unknowns need a dense matrix of {} (plus {} for an LU copy)",
-            gib(matrix),
-            gib(lu)
+            "{unknowns} unknowns need a dense matrix of {}{lu}",
+            gib(matrix)
         )
     }
 }

@@ -2,6 +2,7 @@
 //! needs (scene, α, problem, backend: [`crate::setup`]), calls core, and
 //! reports.
 
+mod advice;
 mod info;
 
 use crate::error::with_flags;
@@ -44,7 +45,7 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
     s.cfg.progress = bar.as_ref().map(|b| b.handle());
     let (out, adaptive) = match &job.adapt {
         None => (
-            solve(&s.problem, &s.cfg, s.backend.as_ref()).map_err(with_flags)?,
+            solve(&s.problem, &s.cfg, s.backend.as_ref()).map_err(|e| advice::sized(e, &s))?,
             None,
         ),
         Some(opts) => {

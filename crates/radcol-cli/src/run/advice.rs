@@ -1,0 +1,122 @@
+//! Refusals for size that say what would fit: the refinement the run used
+//! (flags given or defaulted), and the nearest values whose matrices fit in the memory
+//! available (the user was told "use a coarser mesh" and had to find
+//! out by trial how much coarser).
+
+use crate::error::{bad_input, with_flags};
+use crate::setup::Setup;
+use radcol_core::error::{Error as CoreError, InputError};
+use radcol_core::run::mesh_size;
+
+/// `err` with the CLI's flags named; for a refusal for size, with the
+/// refinement that fits.
+pub fn sized(err: CoreError, s: &Setup) -> anyhow::Error {
+    // Memory grows like N², so the unknowns that fit follow from the ratio.
+    let fit = match &err {
+        CoreError::Input(InputError::TooLarge {
+            bytes_lu,
+            bytes_available,
+            ..
+        }) => {
+            let per_entry = 8.0 * if *bytes_lu > 0.0 { 2.0 } else { 1.0 };
+            (0.9 * *bytes_available as f64 / per_entry).sqrt()
+        }
+        CoreError::Input(InputError::PeakTooLarge {
+            to_come,
+            matrix,
+            available,
+            ..
+        }) => (matrix / 8.0).sqrt() * (0.9 * *available as f64 / to_come).sqrt(),
+        _ => return with_flags(err),
+    };
+    let fit = fit.floor() as u64;
+    let cfg = &s.cfg;
+    let gave = match cfg.max_edge {
+        Some(h) => format!(
+            "--level {} --max-edge {h} --degree {}",
+            cfg.level, cfg.degree
+        ),
+        None => format!("--level {} --degree {}", cfg.level, cfg.degree),
+    };
+    let mut fits = Vec::new();
+    if let Some(h) = cfg.max_edge {
+        if let Some((h2, n)) = coarsest_edge_that_fits(s, h, fit) {
+            fits.push(format!("--max-edge {} ({n} unknowns)", round_up(h2)));
+        }
+    }
+    let unknowns = |level: u32, degree: usize| {
+        mesh_size(&s.problem.surface, level, cfg.max_edge, degree).unknowns
+    };
+    if let Some(l) = (0..cfg.level)
+        .rev()
+        .find(|&l| unknowns(l, cfg.degree) <= fit)
+    {
+        fits.push(format!(
+            "--level {l} ({} unknowns)",
+            unknowns(l, cfg.degree)
+        ));
+    }
+    if let Some(r) = (0..cfg.degree)
+        .rev()
+        .find(|&r| unknowns(cfg.level, r) <= fit)
+    {
+        fits.push(format!(
+            "--degree {r} ({} unknowns)",
+            unknowns(cfg.level, r)
+        ));
+    }
+    let advice = if fits.is_empty() {
+        format!("no coarser setting of these flags fits {fit} unknowns")
+    } else {
+        format!("about {fit} unknowns fit: {}", fits.join(", or "))
+    };
+    bad_input(format!("{err} (this run: {gave}; {advice})")).into()
+}
+
+/// The smallest maximum edge length, at least `h`, whose mesh has at most
+/// `fit` unknowns (bisection on a log scale: the count falls as the length
+/// grows), with its unknowns.
+fn coarsest_edge_that_fits(s: &Setup, h: f64, fit: u64) -> Option<(f64, u64)> {
+    let cfg = &s.cfg;
+    let count =
+        |edge: f64| mesh_size(&s.problem.surface, cfg.level, Some(edge), cfg.degree).unknowns;
+    let (lo_box, hi_box) = s.problem.surface.bounding_box();
+    let mut hi = (hi_box - lo_box).length().max(h);
+    if count(hi) > fit {
+        return None; // the level alone is too fine
+    }
+    let mut lo = h;
+    for _ in 0..40 {
+        let mid = (lo * hi).sqrt();
+        if count(mid) <= fit {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+        if hi / lo < 1.01 {
+            break;
+        }
+    }
+    Some((hi, count(hi)))
+}
+
+/// `v` rounded up to three significant digits, as typed (a length that
+/// still fits).
+fn round_up(v: f64) -> String {
+    let decimals = (2 - v.log10().floor() as i32).max(0);
+    let scale = 10f64.powi(decimals);
+    format!("{:.*}", decimals as usize, (v * scale).ceil() / scale)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::round_up;
+
+    #[test]
+    fn lengths_round_up_to_three_digits() {
+        assert_eq!(round_up(95.04), "95.1");
+        assert_eq!(round_up(0.012341), "0.0124");
+        assert_eq!(round_up(1200.0), "1200");
+        assert_eq!(round_up(1234.5), "1235");
+    }
+}
