@@ -17,7 +17,7 @@ pub enum SceneSpec {
     Sphere(f64),
     /// Ellipsoid with semi-axes a, b, c.
     Ellipsoid(f64, f64, f64),
-    /// The room [0,lx]×[0,ly]×[0,lz].
+    /// The room \[0,lx\]×\[0,ly\]×\[0,lz\].
     Box(f64, f64, f64),
     /// A built-in OBJ scene (see [`BUILTIN_SCENES`]).
     Builtin(String),

@@ -3,7 +3,7 @@
 //!
 //! Precedence is the one on paper: `-z^2` = −(z²), `^` is right-associative
 //! (`2^3^2` = 2⁹), `*` `/` bind tighter than `+` `-`, and both pairs are
-//! left-associative. `**` is accepted for `^`. [`parse`](parse) says which.
+//! left-associative. `**` is accepted for `^`. The `parse` module says which.
 //!
 //! Written here rather than taken from a crate: of the expression crates
 //! measured, exmex gives unary minus priority over `^` by design (`-z^2` =

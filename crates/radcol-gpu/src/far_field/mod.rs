@@ -3,7 +3,7 @@
 //!
 //! Device data (all read-only except the tile):
 //!
-//! * `rules`: 256 [`RuleInfo`], one per class code;
+//! * `rules`: 256 [`RuleInfo`](crate::layout::RuleInfo), one per class code;
 //! * `basis_t`: the basis tables of the used far rules, concatenated, each
 //!   `nq × f` with row q contiguous (the plan's `FarTable::basis_t`);
 //! * `colloc`: the N collocation points;

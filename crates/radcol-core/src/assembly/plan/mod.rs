@@ -8,9 +8,9 @@
 //! so one rule serves all f_r rows and the element's quadrature data is loaded
 //! once per block (it stays in L1 while the f_r rows are filled).
 //!
-//! By phase: [`classify`] (pair classes), the occlusion walk
-//! ([`crate::visibility`]), [`tables`] (far-rule data), [`execute`] (filling a
-//! row block) and [`kernels`] (the vectorised far loop).
+//! By phase: `classify` (pair classes), the occlusion walk
+//! ([`crate::visibility`]), `tables` (far-rule data), `execute` (filling a
+//! row block) and `kernels` (the vectorised far loop).
 
 mod classify;
 mod execute;
