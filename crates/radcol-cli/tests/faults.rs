@@ -186,13 +186,14 @@ fn magnitude_cases() -> Vec<Case> {
             e,
         ]
     };
-    let thin = |t: &'static str| -> [&'static str; 10] {
-        let b: &'static str = Box::leak(format!("box:1,{t},1").into_boxed_str());
+    // u = E / (1 - ρ) = 2 on any closed surface, at a level.
+    let two = |scene: String, level: &'static str| -> [&'static str; 10] {
+        let s: &'static str = Box::leak(scene.into_boxed_str());
         [
             "solve",
-            b,
+            s,
             "--level",
-            "2",
+            level,
             "--rho",
             "0.5",
             "--emission",
@@ -201,22 +202,9 @@ fn magnitude_cases() -> Vec<Case> {
             "2",
         ]
     };
+    let thin = |t: &str| two(format!("box:1,{t},1"), "2");
     // Flat ellipsoids: the rim's radius of curvature is c² (c = 1e-6: 1e-12).
-    let flat = |c: &'static str| -> [&'static str; 10] {
-        let e: &'static str = Box::leak(format!("ellipsoid:1,{c},1").into_boxed_str());
-        [
-            "solve",
-            e,
-            "--level",
-            "1",
-            "--rho",
-            "0.5",
-            "--emission",
-            "1",
-            "--exact",
-            "2",
-        ]
-    };
+    let flat = |c: &str| two(format!("ellipsoid:1,{c},1"), "1");
     let high = |rho: &'static str| {
         [
             "solve",
