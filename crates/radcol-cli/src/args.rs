@@ -283,8 +283,9 @@ pub struct StudyArgs {
     #[arg(long, value_name = "A..B", required = true)]
     pub levels: String,
 
-    /// Draw error vs h and error vs time as an SVG log-log plot [default: none];
-    /// refuses to overwrite without --force.
+    /// Draw error vs h and error vs time as an SVG log-log plot (with --degrees
+    /// or --adaptive: error vs unknowns and vs wall time, a line per degree and
+    /// refinement) [default: none]; refuses to overwrite without --force.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
 

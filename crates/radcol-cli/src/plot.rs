@@ -1,6 +1,9 @@
-//! A hand-written SVG of a study: two log-log panels (error vs h, error vs total
-//! time), three series each (nodes max, global max, L²), decade ticks, a legend.
+//! Hand-written SVG log-log plots: a study (error vs h and vs total time,
+//! three series: nodes max, global max, L²) and a comparison of degrees and
+//! refinements (error vs unknowns and vs wall time, one line per degree and
+//! refinement); two panels sharing the error axis, decade ticks, a legend.
 
+use radcol_core::study::speed::{Refinement, Setting};
 use radcol_core::study::StudyRow;
 use std::fmt::Write as _;
 
@@ -193,16 +196,29 @@ fn ticks(svg: &mut String, axis: LogAxis, horizontal: bool, left: f64) {
     }
 }
 
-/// One panel: frame, ticks, labels, and the three series against `x_of`.
-fn panel(
-    svg: &mut String,
-    left: f64,
-    rows: &[StudyRow],
-    x_of: fn(&StudyRow) -> f64,
-    x_label: &str,
-    y: LogAxis,
-) {
-    let x = LogAxis::covering(rows.iter().map(x_of));
+/// One plotted line: its points (x, y), a marker at each.
+struct Line {
+    name: String,
+    color: &'static str,
+    marker: Marker,
+    dashed: bool,
+    points: Vec<(f64, f64)>,
+}
+
+impl Line {
+    /// The points with positive finite coordinates (the others cannot be
+    /// drawn on log axes).
+    fn drawable(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        self.points
+            .iter()
+            .copied()
+            .filter(|(a, b)| a.is_finite() && *a > 0.0 && b.is_finite() && *b > 0.0)
+    }
+}
+
+/// One panel at `left`: frame, ticks, labels, and `lines` on axes `x`, `y`.
+fn panel(svg: &mut String, left: f64, lines: &[Line], x_label: &str, y: LogAxis) {
+    let x = LogAxis::covering(lines.iter().flat_map(|l| l.drawable().map(|p| p.0)));
     let top = PANEL_TOP;
     let bottom = top + PANEL_H;
     let px = |v: f64| left + x.frac(v) * PANEL_W;
@@ -231,33 +247,36 @@ fn panel(
         left - 58.0,
         top + PANEL_H / 2.0
     );
-    for s in &SERIES {
-        let pts: Vec<(f64, f64)> = rows
-            .iter()
-            .map(|r| (x_of(r), (s.value)(r)))
-            .filter(|(a, b)| a.is_finite() && *a > 0.0 && b.is_finite() && *b > 0.0)
-            .map(|(a, b)| (px(a), py(b)))
-            .collect();
+    for line in lines {
+        let pts: Vec<(f64, f64)> = line.drawable().map(|(a, b)| (px(a), py(b))).collect();
         if pts.len() > 1 {
             let path: Vec<String> = pts.iter().map(|(a, b)| format!("{a:.2},{b:.2}")).collect();
+            let dash = if line.dashed {
+                r#" stroke-dasharray="7 4""#
+            } else {
+                ""
+            };
             let _ = writeln!(
                 svg,
-                r#"<polyline points="{}" fill="none" stroke="{}" stroke-width="1.8"/>"#,
+                r#"<polyline points="{}" fill="none" stroke="{}" stroke-width="1.8"{dash}/>"#,
                 path.join(" "),
-                s.color
+                line.color
             );
         }
         for &(a, b) in &pts {
-            marker(svg, s.marker, a, b, s.color);
+            marker(svg, line.marker, a, b, line.color);
         }
     }
 }
 
-/// The SVG document for `rows`, titled `title`.
-pub fn study_svg(rows: &[StudyRow], title: &str) -> String {
+/// The document: `title`, the two panels (sharing the error axis) and a
+/// legend of the left panel's lines, in rows of six under both panels.
+fn document(title: &str, left: (&[Line], &str), right: (&[Line], &str)) -> String {
     let y = LogAxis::covering(
-        rows.iter()
-            .flat_map(|r| SERIES.iter().map(move |s| (s.value)(r))),
+        left.0
+            .iter()
+            .chain(right.0)
+            .flat_map(|l| l.drawable().map(|p| p.1)),
     );
     let mut svg = String::new();
     let _ = writeln!(
@@ -274,37 +293,112 @@ pub fn study_svg(rows: &[StudyRow], title: &str) -> String {
         WIDTH / 2.0,
         escape(title)
     );
-    panel(&mut svg, PANEL_LEFT[0], rows, |r| r.h, "mesh size h", y);
-    panel(
-        &mut svg,
-        PANEL_LEFT[1],
-        rows,
-        |r| r.total_s,
-        "total time per level (s)",
-        y,
-    );
-    // Legend, centred under both panels.
-    let legend_y = HEIGHT - 28.0;
-    let mut lx = WIDTH / 2.0 - 210.0;
-    for s in &SERIES {
-        let _ = writeln!(
-            svg,
-            r#"<line x1="{lx:.1}" y1="{legend_y}" x2="{:.1}" y2="{legend_y}" stroke="{}" stroke-width="1.8"/>"#,
-            lx + 36.0,
-            s.color
-        );
-        marker(&mut svg, s.marker, lx + 18.0, legend_y, s.color);
-        let _ = writeln!(
-            svg,
-            r#"<text x="{:.1}" y="{:.1}">{}</text>"#,
-            lx + 44.0,
-            legend_y + 4.0,
-            s.name
-        );
-        lx += 150.0;
+    panel(&mut svg, PANEL_LEFT[0], left.0, left.1, y);
+    panel(&mut svg, PANEL_LEFT[1], right.0, right.1, y);
+    const PER_ROW: usize = 6;
+    for (row, chunk) in left.0.chunks(PER_ROW).enumerate() {
+        let legend_y = HEIGHT - 28.0 - 20.0 * (left.0.len().div_ceil(PER_ROW) - 1 - row) as f64;
+        let mut lx = WIDTH / 2.0 - 75.0 * chunk.len() as f64 + 15.0;
+        for line in chunk {
+            let dash = if line.dashed {
+                r#" stroke-dasharray="7 4""#
+            } else {
+                ""
+            };
+            let _ = writeln!(
+                svg,
+                r#"<line x1="{lx:.1}" y1="{legend_y}" x2="{:.1}" y2="{legend_y}" stroke="{}" stroke-width="1.8"{dash}/>"#,
+                lx + 36.0,
+                line.color
+            );
+            marker(&mut svg, line.marker, lx + 18.0, legend_y, line.color);
+            let _ = writeln!(
+                svg,
+                r#"<text x="{:.1}" y="{:.1}">{}</text>"#,
+                lx + 44.0,
+                legend_y + 4.0,
+                escape(&line.name)
+            );
+            lx += 150.0;
+        }
     }
     svg.push_str("</svg>\n");
     svg
+}
+
+/// The SVG document for `rows`, titled `title`.
+pub fn study_svg(rows: &[StudyRow], title: &str) -> String {
+    let lines = |x_of: fn(&StudyRow) -> f64| -> Vec<Line> {
+        SERIES
+            .iter()
+            .map(|s| Line {
+                name: s.name.to_string(),
+                color: s.color,
+                marker: s.marker,
+                dashed: false,
+                points: rows.iter().map(|r| (x_of(r), (s.value)(r))).collect(),
+            })
+            .collect()
+    };
+    document(
+        title,
+        (&lines(|r| r.h), "mesh size h"),
+        (&lines(|r| r.total_s), "total time per level (s)"),
+    )
+}
+
+/// Colours of the degrees, in order.
+const PALETTE: [&str; 8] = [
+    "#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf",
+];
+
+/// The SVG document comparing `settings` (as `study --degrees/--adaptive`
+/// collects them): error against unknowns and against wall seconds, a solid
+/// line with circles per degree's uniform study and a dashed one with
+/// squares per adaptive run, in the order first met.
+pub fn comparison_svg(settings: &[Setting], title: &str) -> String {
+    let mut keys: Vec<(usize, bool)> = Vec::new();
+    for s in settings {
+        let key = (
+            s.degree,
+            matches!(s.refinement, Refinement::Adaptive { .. }),
+        );
+        if !keys.contains(&key) {
+            keys.push(key);
+        }
+    }
+    let mut degrees: Vec<usize> = keys.iter().map(|k| k.0).collect();
+    degrees.dedup();
+    let lines = |x_of: fn(&Setting) -> f64| -> Vec<Line> {
+        keys.iter()
+            .map(|&(r, adaptive)| {
+                let colour = degrees.iter().position(|&d| d == r).unwrap_or(0);
+                Line {
+                    name: format!("r = {r} {}", if adaptive { "adaptive" } else { "uniform" }),
+                    color: PALETTE[colour % PALETTE.len()],
+                    marker: if adaptive {
+                        Marker::Square
+                    } else {
+                        Marker::Circle
+                    },
+                    dashed: adaptive,
+                    points: settings
+                        .iter()
+                        .filter(|s| {
+                            s.degree == r
+                                && matches!(s.refinement, Refinement::Adaptive { .. }) == adaptive
+                        })
+                        .map(|s| (x_of(s), s.error))
+                        .collect(),
+                }
+            })
+            .collect()
+    };
+    document(
+        title,
+        (&lines(|s| s.unknowns as f64), "unknowns"),
+        (&lines(|s| s.seconds), "wall time (s)"),
+    )
 }
 
 #[cfg(test)]
@@ -355,5 +449,37 @@ mod tests {
         assert_eq!(svg.matches("<polyline").count(), 6);
         assert!(svg.contains("nodes max") && svg.contains("global max") && svg.contains(">L2<"));
         assert!(svg.contains("sphere &lt;r = 1&gt;"));
+    }
+
+    #[test]
+    fn comparison_has_a_line_per_degree_and_refinement() {
+        let setting =
+            |degree: usize, refinement: Refinement, unknowns: usize, error: f64| Setting {
+                degree,
+                refinement,
+                unknowns,
+                seconds: unknowns as f64 * 1e-3,
+                error,
+                estimated: true,
+            };
+        let u = |level| Refinement::Uniform { level };
+        let a = |step| Refinement::Adaptive { step };
+        let settings = vec![
+            setting(1, u(1), 96, 1e-2),
+            setting(1, u(2), 384, 3e-3),
+            setting(1, a(1), 96, 1e-2),
+            setting(1, a(2), 200, 1e-3),
+            setting(2, u(1), 192, 1e-3),
+            setting(2, u(2), 768, 1e-4),
+        ];
+        let svg = comparison_svg(&settings, "cornell");
+        // Three lines in each of the two panels, one of them dashed.
+        assert_eq!(svg.matches("<polyline").count(), 6);
+        assert_eq!(svg.matches("stroke-dasharray").count(), 2 + 1);
+        for name in ["r = 1 uniform", "r = 1 adaptive", "r = 2 uniform"] {
+            assert_eq!(svg.matches(name).count(), 1, "{name}");
+        }
+        // Degree 2 has its own colour.
+        assert!(svg.contains(PALETTE[1]) && !svg.contains(PALETTE[2]));
     }
 }

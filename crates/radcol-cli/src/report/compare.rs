@@ -35,6 +35,8 @@ pub struct ComparisonReport {
     /// The ranking.
     #[serde(flatten)]
     pub fastest: Fastest,
+    /// The SVG written with `--plot`.
+    pub plot: Option<String>,
 }
 
 impl fmt::Display for ComparisonReport {

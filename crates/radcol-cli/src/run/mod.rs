@@ -152,16 +152,21 @@ fn uniform_study(
 /// `--degrees`) the uniform study and, when asked, the adaptive run from the
 /// first level; then the fastest setting per decade of error.
 fn run_comparison(job: StudyJob, w: &mut dyn Write) -> Result<()> {
+    if let Some(p) = &job.plot {
+        check_writable(p)?;
+    }
     let degrees = job
         .degrees
         .clone()
         .unwrap_or(job.problem.degree..=job.problem.degree);
     let mut parts = Vec::new();
     let mut settings = Vec::new();
+    let mut scene = String::new();
     for r in degrees {
         let mut spec = job.problem.clone();
         spec.degree = r;
         let s = setup::setup(&spec, Some(*job.levels.start()), None, false)?;
+        scene.clone_from(&s.scene);
         let (header, rows) = uniform_study(&s, &job.levels, w)?;
         let theory = predicted_orders(s.cfg.degree, s.alpha.value, &s.alpha.a0);
         let footer = StudyFooter::new(&rows, theory, None);
@@ -194,6 +199,23 @@ fn run_comparison(job: StudyJob, w: &mut dyn Write) -> Result<()> {
             writeln!(w)?;
         }
     }
+    let plot = match &job.plot {
+        Some(file) => {
+            let kind = if settings.iter().any(|s| s.estimated) {
+                "estimated"
+            } else {
+                "true"
+            };
+            let title = format!("{scene}: {kind} error against unknowns and time");
+            let svg = plot::comparison_svg(&settings, &title);
+            let mut f = output::create(file)?;
+            f.write_all(svg.as_bytes())
+                .and_then(|_| f.flush())
+                .with_context(|| format!("writing {}", file.path.display()))?;
+            Some(file.path.display().to_string())
+        }
+        None => None,
+    };
     let fastest = Fastest {
         fastest: fastest_per_decade(&settings),
         settings,
@@ -203,10 +225,14 @@ fn run_comparison(job: StudyJob, w: &mut dyn Write) -> Result<()> {
             command: "study",
             degrees: parts,
             fastest,
+            plot,
         };
         report::emit(w, &report, true)
     } else {
         write!(w, "{fastest}")?;
+        if let Some(p) = plot {
+            writeln!(w, "wrote plot to {p}")?;
+        }
         Ok(())
     }
 }

@@ -272,12 +272,6 @@ fn study_job(a: StudyArgs) -> Result<StudyJob> {
             .into());
         }
     }
-    if plot.is_some() && (degrees.is_some() || a.adaptive.is_some()) {
-        return Err(bad_input(
-            "--plot draws one degree's uniform study: it cannot be used with --degrees or --adaptive (their table ends with the fastest setting per error decade)",
-        )
-        .into());
-    }
     Ok(StudyJob {
         problem,
         levels,
