@@ -17,6 +17,7 @@ mod gpu_conformance;
 mod gpu_select;
 mod gpu_solve;
 mod house;
+mod relight;
 mod reuse;
 mod scenes;
 mod shadows;

@@ -82,6 +82,14 @@ pub enum InputError {
         /// Bytes available.
         available: u64,
     },
+    /// A relit problem on a surface other than the one assembled on.
+    #[error("relighting solves on the operator assembled for '{assembled}'; the problem is on '{given}' (a different surface object): assemble it first")]
+    OtherSurface {
+        /// The surface the operator was assembled on.
+        assembled: String,
+        /// The surface of the problem given.
+        given: String,
+    },
     /// A maximum edge length that is not a positive finite number.
     #[error("max edge length {value} must be a positive finite number (scene units)")]
     MaxEdge {

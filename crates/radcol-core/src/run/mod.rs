@@ -17,12 +17,14 @@ mod config;
 mod inputs;
 mod outcome;
 mod pipeline;
+mod relight;
 mod size;
 
 pub use config::{SolveConfig, SolverKind};
 pub use inputs::{check_size, discretize, MAX_EXTENT, MIN_EXTENT};
 pub use outcome::{ChannelResult, SolveOutcome, SolverReport, Timings};
 pub use pipeline::{solve, solve_on_mesh, true_residual};
+pub use relight::Relighter;
 pub use size::{
     available_memory, elements, mesh_size, process_memory, MemoryEstimate, MemoryUse, MeshSize,
 };

@@ -1,8 +1,9 @@
 //! The stages of one solve (see the module overview in [`super`]).
 
-use super::inputs::{check_quadrature, discretize, fields, NodalFields};
+use super::inputs::{check_quadrature, discretize, fields};
+use super::relight::Relighter;
 use super::size::{available_memory, MemoryEstimate, MemoryUse};
-use super::{ChannelResult, SolveConfig, SolveOutcome, SolverKind, SolverReport, Timings};
+use super::{ChannelResult, SolveConfig, SolveOutcome, Timings};
 use crate::assembly::QuadratureOptions;
 use crate::assembly::{Assembled, AssemblyBackend, AssemblyPlan, Unchanged};
 use crate::discretization::Discretization;
@@ -15,88 +16,10 @@ use crate::mesh::Mesh;
 use crate::nodes::NodeSet;
 use crate::norms::error_norms;
 use crate::problem::Problem;
-use crate::solution::{integrate_nodal, Solution};
-use crate::solve::{gmres, DenseLu, LinearOperator, RadiosityOperator};
+use crate::solve::LinearOperator;
 use crate::visibility::{self, VisibilityAnalysis};
 use std::sync::Arc;
 use std::time::Instant;
-
-/// Solves every channel's system (I - diag ρ_c Gm) u = E_c; LU factors are
-/// shared between consecutive channels with equal ρ.
-fn solve_channels(
-    problem: &Problem,
-    cfg: &SolveConfig,
-    disc: &Arc<Discretization>,
-    matrix: &crate::matrix::DenseMatrix,
-    fields: Vec<NodalFields>,
-    guess: Option<&[Vec<f64>]>,
-) -> Result<Vec<ChannelResult>, Error> {
-    let mut channels = Vec::new();
-    let mut lu_cache: Option<(Vec<f64>, DenseLu, f64)> = None;
-    if let Some(p) = &cfg.progress {
-        p.start("solve", problem.channels.len() as u64);
-    }
-    for (c, (ch, (rho, emission))) in problem.channels.iter().zip(fields).enumerate() {
-        let op = RadiosityOperator::new(matrix, &rho)?;
-        let mut x = match guess.and_then(|g| g.get(c)) {
-            Some(g) if g.len() == emission.len() => g.clone(),
-            _ => emission.clone(),
-        };
-        let (iterations, growth, condition, at_rounding_floor) = match cfg.solver {
-            SolverKind::Gmres => {
-                let info = gmres(&op, &emission, &mut x, &cfg.gmres)?;
-                (
-                    info.iterations,
-                    Some(info.growth),
-                    None,
-                    info.at_rounding_floor,
-                )
-            }
-            SolverKind::Lu => {
-                if lu_cache.as_ref().is_none_or(|(r, _, _)| *r != rho) {
-                    // The old factors go first: a channel with other ρ
-                    // (Cornell's green after red) held two copies at once.
-                    drop(lu_cache.take());
-                    let lu = DenseLu::factor_radiosity(&op)?;
-                    let kappa = lu.condition_estimate();
-                    lu_cache = Some((rho.clone(), lu, kappa));
-                }
-                let (_, lu, kappa) = lu_cache.as_ref().expect("just built");
-                lu.solve_in_place(&mut x)?;
-                (0, None, Some(*kappa), false)
-            }
-        };
-        let residual = true_residual(&op, &x, &emission);
-        if !residual.is_finite() {
-            return Err(crate::solve::SolveError::NonFinite.into());
-        }
-        let integral_e = integrate_nodal(disc, &emission);
-        let solution = Solution::new(disc.clone(), x);
-        channels.push(ChannelResult {
-            name: ch.name.clone(),
-            integral_u: solution.integral(),
-            integral_e,
-            solution,
-            rho,
-            emission,
-            solver: SolverReport {
-                kind: cfg.solver,
-                iterations,
-                residual,
-                growth,
-                condition,
-                at_rounding_floor,
-            },
-            errors: None,
-            estimate: None,
-            limited: None,
-        });
-        if let Some(p) = &cfg.progress {
-            p.advance(1);
-        }
-    }
-    Ok(channels)
-}
 
 /// The plans of one solve, kept by the adaptive loop so that the next
 /// solve, on a mesh refined from this one, reuses their unchanged pairs.
@@ -329,8 +252,8 @@ impl Stages<'_> {
         let assembly_s = t.elapsed().as_secs_f64();
 
         let t = Instant::now();
-        let mut channels =
-            solve_channels(problem, cfg, &disc, &assembled.matrix, fields, self.guess)?;
+        let mut channels = Relighter::over(disc.clone(), &assembled.matrix, cfg)
+            .solve_fields(problem, fields, self.guess)?;
         let solve_s = t.elapsed().as_secs_f64();
 
         let t = Instant::now();
@@ -391,7 +314,7 @@ impl Stages<'_> {
 
 /// Limits `ch`'s u_n to nonnegative values when E ≥ 0 (ρ ≥ 0 always) and
 /// u_n has negative ones; the element estimates grow by the change.
-fn limit_negative(ch: &mut ChannelResult) {
+pub(crate) fn limit_negative(ch: &mut ChannelResult) {
     if ch.emission.iter().any(|&e| e < 0.0) {
         return;
     }
