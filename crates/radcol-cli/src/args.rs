@@ -228,6 +228,14 @@ pub struct SolveArgs {
     #[arg(long, value_name = "FILE")]
     pub out: Vec<PathBuf>,
 
+    /// After the solve, solve again on the same matrix (no reassembly) for new lights or
+    /// materials, and report each set's ∫u and solve time; repeat for several sets. For a
+    /// scene: ';'-separated NAME=R,G,B or NAME.Ke=R,G,B (emission of material NAME) and
+    /// NAME.Kd=R,G,B (its reflectance); for a surface: a new emission expression. The
+    /// --out files show the first solve.
+    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
+    pub relight: Vec<String>,
+
     /// Write a PNG map of the estimated error seen by --camera: each element coloured by its
     /// estimated max error relative to max |u| (worst channel), log scale from 1e-6 (dark)
     /// to 1e-1 (bright), a colour bar with a tick per decade along the bottom edge.

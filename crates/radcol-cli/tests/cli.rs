@@ -1184,3 +1184,66 @@ fn predicted_peak_memory_is_within_ten_percent_of_the_measured_one() {
         assert!(num(m, "matrix_bytes") < 0.6 * measured, "{m}");
     }
 }
+
+/// `--relight`: the same matrix solves again for new lights or materials.
+/// The radiosity is linear in E, so halving every light halves ∫u in every
+/// channel; switching them off gives 0; typos are refused before the solve.
+#[test]
+fn relight_solves_new_lights_on_the_same_matrix() {
+    let j = stdout_json(&radcol_ok(&[
+        "solve",
+        "shadow",
+        "--relight",
+        "light=0.5,0.5,0.5",
+        "--relight",
+        "light=0,0,0",
+        "--relight",
+        "floor.Kd=0.1,0.1,0.1",
+        "--json",
+    ]));
+    let channels = j["channels"].as_array().unwrap();
+    let sets = j["relit"].as_array().unwrap();
+    assert_eq!(sets.len(), 3);
+    for (c, first) in channels.iter().enumerate() {
+        let u0 = num(first, "integral_u");
+        let half = num(&sets[0]["channels"][c], "integral_u");
+        assert!(
+            (half - 0.5 * u0).abs() <= 1e-12 * u0,
+            "{half} against {u0} / 2"
+        );
+        assert_eq!(num(&sets[1]["channels"][c], "integral_u"), 0.0);
+        // A darker floor reflects less light: ∫u falls, ∫E stays.
+        assert!(num(&sets[2]["channels"][c], "integral_u") < u0);
+        assert_eq!(
+            num(&sets[2]["channels"][c], "integral_e"),
+            num(first, "integral_e")
+        );
+    }
+    assert_one_line_error(
+        &["solve", "shadow", "--relight", "lamp=1,1,1"],
+        2,
+        &["--relight 'lamp=1,1,1'", "no material 'lamp'", "light"],
+    );
+    assert_one_line_error(
+        &["solve", "shadow", "--relight", "light=1,1"],
+        2,
+        &["--relight", "NAME=R,G,B"],
+    );
+    assert_one_line_error(
+        &["solve", "shadow", "--relight", "floor.Kd=1,1,1"],
+        2,
+        &["--relight", "[0, 1)"],
+    );
+    assert_one_line_error(
+        &[
+            "solve",
+            "sphere",
+            "--target-error",
+            "1e-2",
+            "--relight",
+            "2",
+        ],
+        2,
+        &["--relight", "--target-error"],
+    );
+}

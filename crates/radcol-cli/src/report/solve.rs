@@ -118,6 +118,8 @@ pub struct SolveReport {
     out: Vec<Written>,
     /// The adaptive loop's steps, with --target-error.
     pub adaptive: Option<AdaptReport>,
+    /// The --relight sets, solved on the same matrix.
+    pub relit: Vec<crate::run::RelitSet>,
     /// What makes this answer doubtful, and what to change.
     warnings: Vec<String>,
     #[serde(skip)]
@@ -201,6 +203,7 @@ impl SolveReport {
             memory: out.memory.measured(),
             out: written.to_vec(),
             adaptive: None,
+            relit: Vec::new(),
             warnings: super::trust::solve_warnings(s, out),
             contents: scene.map(|sc| SceneSummary {
                 triangles: sc.triangle_count(),
@@ -427,6 +430,9 @@ impl fmt::Display for SolveReport {
             write!(f, "{a}")?;
         }
         self.fmt_channels(f)?;
+        for set in &self.relit {
+            write!(f, "{set}")?;
+        }
         for w in &self.out {
             writeln!(f, "  wrote {} to {} ({})", w.what, w.path, secs(w.seconds))?;
         }

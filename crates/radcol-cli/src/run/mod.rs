@@ -4,6 +4,9 @@
 
 mod advice;
 mod info;
+mod relight;
+
+pub use relight::RelitSet;
 
 use crate::error::with_flags;
 use crate::report::{
@@ -40,6 +43,7 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
         check_writable(&o.file)?;
     }
     let mut s = setup::setup(&job.problem, job.level, job.max_edge, job.adapt.is_some())?;
+    let relit = relight::relit_problems(&job.relight, &s)?;
     let look = setup::look(&job.look, &s);
     let bar = progress::Bar::for_stderr();
     s.cfg.progress = bar.as_ref().map(|b| b.handle());
@@ -67,6 +71,7 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
             (res.outcome, Some(report))
         }
     };
+    let sets = relight::relight_all(job.relight.iter().cloned().zip(relit).collect(), &s, &out)?;
     let written = output::write_all(&job.outputs, &look, &out, bar.as_ref())?;
     if let Some(b) = bar {
         b.finish();
@@ -77,6 +82,7 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
         .map(|a| a.summary());
     let mut report = SolveReport::new(&s, &out, &written);
     report.adaptive = adaptive;
+    report.relit = sets;
     report::emit(w, &report, s.json)?;
     if let Some(why) = report::untrusted(&s, &out) {
         return Err(anyhow::anyhow!(why));

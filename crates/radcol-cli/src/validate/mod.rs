@@ -95,6 +95,8 @@ pub struct SolveJob {
     pub adapt: Option<AdaptOptions>,
     /// Fail when the target is not reached.
     pub strict: bool,
+    /// `--relight` sets, solved after the first on its matrix.
+    pub relight: Vec<String>,
 }
 
 /// `radcol study`.
@@ -181,6 +183,12 @@ fn solve_job(a: SolveArgs) -> Result<SolveJob> {
         .target_error
         .map(|t| adapt(t, a.max_unknowns, &problem))
         .transpose()?;
+    if adapt.is_some() && !a.relight.is_empty() {
+        return Err(bad_input(
+            "--relight solves again on one assembled matrix: it cannot be used with --target-error, whose mesh follows the first lights",
+        )
+        .into());
+    }
     Ok(SolveJob {
         problem,
         level: a.level,
@@ -189,6 +197,7 @@ fn solve_job(a: SolveArgs) -> Result<SolveJob> {
         look,
         adapt,
         strict: a.strict,
+        relight: a.relight,
     })
 }
 
