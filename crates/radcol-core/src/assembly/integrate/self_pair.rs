@@ -134,8 +134,12 @@ impl ElementIntegrator<'_> {
                 windows.push((duffy, window, rules, coarse));
             }
         }
+        // The size of the integral, as the sum of its windows' magnitudes:
+        // a φ that changes sign (a Lagrange basis function, u_n) can make
+        // the total cancel to rounding, and a tolerance relative to that
+        // would split every window to the depth limit.
         let scale = (0..m)
-            .map(|j| windows.iter().map(|w| w.3[j]).sum::<f64>().abs())
+            .map(|j| windows.iter().map(|w| w.3[j].abs()).sum::<f64>())
             .fold(0.0, f64::max);
         let tol = self.opts.tol * scale;
         for (duffy, window, rules, coarse) in &windows {
