@@ -24,6 +24,11 @@ pub struct Cli {
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
+
+    /// Worker threads for assembly, solve and rendering [default: RAYON_NUM_THREADS if set,
+    /// else one per logical CPU].
+    #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    pub threads: Option<u16>,
 }
 
 /// The subcommands.
@@ -225,7 +230,7 @@ pub struct SolveArgs {
     /// node: element,node,x,y,z,u…), .ply and .glb/.gltf (per-vertex radiosity on a
     /// tessellation of every element), .png (tone-mapped image) or .exr (linear radiance u/π)
     /// seen by --camera. Refuses to overwrite without --force.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, short = 'o', value_name = "FILE")]
     pub out: Vec<PathBuf>,
 
     /// After the solve, solve again on the same matrix (no reassembly) for new lights or

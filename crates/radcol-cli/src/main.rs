@@ -101,5 +101,12 @@ fn try_main() -> anyhow::Result<()> {
             _ => return Err(error::bad_input(error::clap_one_line(&e)).into()),
         },
     };
+    if let Some(n) = cli.threads {
+        // Before any parallel work: the global pool is built once.
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n.into())
+            .build_global()
+            .map_err(|e| error::bad_input(format!("--threads {n}: {e}")))?;
+    }
     run::run(validate::Config::from_cli(cli)?)
 }

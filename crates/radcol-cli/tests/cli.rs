@@ -1247,3 +1247,44 @@ fn relight_solves_new_lights_on_the_same_matrix() {
         &["--relight", "--target-error"],
     );
 }
+
+/// `--threads N` sizes the worker pool (before or after the command), and
+/// the answer does not depend on it; `-o` is `--out`.
+#[test]
+fn threads_set_the_pool_and_not_the_answer() {
+    let dir = scratch("threads");
+    let csv = dir.join("u.csv");
+    let one = stdout_json(&radcol_ok(&[
+        "solve",
+        "sphere",
+        "--level",
+        "1",
+        "--threads",
+        "1",
+        "-o",
+        csv.to_str().unwrap(),
+        "--json",
+    ]));
+    assert_eq!(one["backend"]["device"], "1 rayon thread");
+    assert!(csv.exists());
+    let two = stdout_json(&radcol_ok(&[
+        "--threads",
+        "2",
+        "solve",
+        "sphere",
+        "--level",
+        "1",
+        "--json",
+    ]));
+    assert_eq!(two["backend"]["device"], "2 rayon threads");
+    let (a, b) = (
+        num(&one["channels"][0], "integral_u"),
+        num(&two["channels"][0], "integral_u"),
+    );
+    assert!((a - b).abs() <= 1e-13 * a, "{a} against {b}");
+    assert_one_line_error(
+        &["solve", "sphere", "--threads", "0"],
+        2,
+        &["--threads", "0"],
+    );
+}

@@ -15,7 +15,10 @@ impl AssemblyBackend for CpuBackend {
     fn info(&self) -> BackendInfo {
         BackendInfo {
             kind: BackendKind::Cpu,
-            device: format!("{} rayon threads", rayon::current_num_threads()),
+            device: match rayon::current_num_threads() {
+                1 => "1 rayon thread".into(),
+                n => format!("{n} rayon threads"),
+            },
             precision: Scalar::F64,
         }
     }
