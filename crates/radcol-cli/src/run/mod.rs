@@ -104,14 +104,7 @@ fn run_study(job: StudyJob, w: &mut dyn Write) -> Result<()> {
     let (header, rows) = uniform_study(&s, &job.levels, w)?;
     let theory = predicted_orders(s.cfg.degree, s.alpha.value, &s.alpha.a0);
     let plot_path = match &job.plot {
-        Some(file) => {
-            let svg = plot::study_svg(&rows, &header.title());
-            let mut f = output::create(file)?;
-            f.write_all(svg.as_bytes())
-                .and_then(|_| f.flush())
-                .with_context(|| format!("writing {}", file.path.display()))?;
-            Some(file.path.display().to_string())
-        }
+        Some(file) => Some(write_svg(file, &plot::study_svg(&rows, &header.title()))?),
         None => None,
     };
     let footer = StudyFooter::new(&rows, theory, plot_path);
@@ -213,12 +206,7 @@ fn run_comparison(job: StudyJob, w: &mut dyn Write) -> Result<()> {
                 "true"
             };
             let title = format!("{scene}: {kind} error against unknowns and time");
-            let svg = plot::comparison_svg(&settings, &title);
-            let mut f = output::create(file)?;
-            f.write_all(svg.as_bytes())
-                .and_then(|_| f.flush())
-                .with_context(|| format!("writing {}", file.path.display()))?;
-            Some(file.path.display().to_string())
+            Some(write_svg(file, &plot::comparison_svg(&settings, &title))?)
         }
         None => None,
     };
@@ -241,6 +229,15 @@ fn run_comparison(job: StudyJob, w: &mut dyn Write) -> Result<()> {
         }
         Ok(())
     }
+}
+
+/// Writes a `--plot` SVG; returns its path as shown.
+fn write_svg(file: &crate::validate::OutputFile, svg: &str) -> Result<String> {
+    let mut f = output::create(file)?;
+    f.write_all(svg.as_bytes())
+        .and_then(|_| f.flush())
+        .with_context(|| format!("writing {}", file.path.display()))?;
+    Ok(file.path.display().to_string())
 }
 
 fn run_nodes(job: NodesJob, w: &mut dyn Write) -> Result<()> {
