@@ -58,7 +58,14 @@ fn uniform(problem: &Problem, cfg: &SolveConfig, target: f64) -> String {
             level,
             ..cfg.clone()
         };
-        let n = mesh_size(&problem.surface, level, cfg.max_edge, cfg.degree).unknowns;
+        let n = mesh_size(
+            &problem.surface,
+            level,
+            cfg.max_edge,
+            cfg.grade.as_ref(),
+            cfg.degree,
+        )
+        .unknowns;
         if n > UNIFORM_CAP {
             return format!(
                 "not reached by {UNIFORM_CAP} unknowns ({:.1} s)",

@@ -120,6 +120,19 @@ pub struct ProblemArgs {
     #[arg(long, value_name = "EXPR", allow_hyphen_values = true)]
     pub exact: Option<String>,
 
+    /// Grade the mesh towards concave edges (a floor meeting a wall) and contact lines (a
+    /// block resting on a floor), found from the geometry: element sizes H (d/D)^(1 - 1/Q) at
+    /// distance d from the nearest such line, within --grade-zone D, after
+    /// --level/--max-edge (H: their size). Q in [1, 3]; 2 suits degree 1 (Atkinson, Chien
+    /// and Seol 2000) [default: no grading].
+    #[arg(long, value_name = "Q", allow_hyphen_values = true)]
+    pub grade: Option<f64>,
+
+    /// With --grade: the width D of the graded zone on either side of each line (scene
+    /// units) [default: a quarter of the scene's largest extent].
+    #[arg(long, value_name = "D", allow_hyphen_values = true, requires = "grade")]
+    pub grade_zone: Option<f64>,
+
     /// Linear solver.
     #[arg(long, value_enum, default_value_t = SolverArg::Gmres)]
     pub solver: SolverArg,

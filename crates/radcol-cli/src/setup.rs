@@ -176,6 +176,7 @@ pub fn setup(
         quad: p.quad.clone(),
         check_memory: true,
         max_edge,
+        grade: p.grade,
         estimate: p.estimate,
         limit_negative: p.limit_negative,
         progress: None,

@@ -1288,3 +1288,40 @@ fn threads_set_the_pool_and_not_the_answer() {
         &["--threads", "0"],
     );
 }
+
+/// --grade refines towards the Cornell box's concave edges and the blocks'
+/// contact lines: more elements than the same level ungraded, the smallest
+/// ones about H²/D, and the report says what it graded towards.
+#[test]
+fn grade_refines_towards_concave_edges_and_contact_lines() {
+    let args = |extra: &[&str]| {
+        let mut a = vec!["solve", "cornell", "-l", "1", "--no-estimate", "--json"];
+        a.extend_from_slice(extra);
+        stdout_json(&radcol_ok(&a))
+    };
+    let plain = args(&[]);
+    let graded = args(&["--grade", "2", "--grade-zone", "100"]);
+    let g = &graded["grading"];
+    assert_eq!(g["exponent"], 2.0);
+    assert_eq!(g["zone"], 100.0);
+    // Room edges (12, each from both faces and split by the base
+    // triangles) and the blocks' 8 bottom edges at least.
+    assert!(g["lines"].as_u64().unwrap() >= 20, "{g}");
+    let n = |v: &serde_json::Value| v["elements"].as_u64().unwrap();
+    assert!(n(&graded) > n(&plain), "{} vs {}", n(&graded), n(&plain));
+    assert!(plain["grading"].is_null());
+    let text = String::from_utf8(
+        radcol_ok(&[
+            "solve",
+            "cornell",
+            "-l",
+            "0",
+            "--no-estimate",
+            "--grade",
+            "2",
+        ])
+        .stdout,
+    )
+    .unwrap();
+    assert!(text.contains("grading     q = 2 within 139"), "{text}");
+}

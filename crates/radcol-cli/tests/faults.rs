@@ -435,6 +435,31 @@ fn flag_cases() -> Vec<Case> {
             ),
         ),
         case(
+            "--grade 0.5",
+            &["solve", "room", "--grade", "0.5"],
+            Refused(2, &["--grade 0.5", "[1, 3]"]),
+        ),
+        case(
+            "--grade NaN",
+            &["solve", "room", "--grade", "NaN"],
+            Refused(2, &["--grade NaN", "exponent"]),
+        ),
+        case(
+            "--grade-zone -1",
+            &["solve", "room", "--grade", "2", "--grade-zone", "-1"],
+            Refused(2, &["--grade-zone -1", "positive"]),
+        ),
+        case(
+            "--grade-zone without --grade",
+            &["solve", "room", "--grade-zone", "1"],
+            Refused(2, &["--grade"]),
+        ),
+        case(
+            "--grade on a sphere",
+            &["solve", "sphere", "-l", "1", "--grade", "2"],
+            Warned(&["--grade", "no concave edge"]),
+        ),
+        case(
             "info --max-edge 1e-9",
             &["info", "sphere", "--max-edge", "1e-9"],
             Says(&["more than 4194304 (counting stopped there)"]),

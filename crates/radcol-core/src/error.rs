@@ -96,6 +96,20 @@ pub enum InputError {
         /// The length asked for.
         value: f64,
     },
+    /// A grading exponent outside the accepted range.
+    #[error("grading exponent {value} must lie in [{}, {}]: 1 is no grading, 2 suits degree 1, and beyond 3 the elements at each line multiply by a power of the mesh size", range.start(), range.end())]
+    Grade {
+        /// The exponent asked for.
+        value: f64,
+        /// The accepted range.
+        range: std::ops::RangeInclusive<f64>,
+    },
+    /// A graded zone width that is not a positive finite number.
+    #[error("graded zone width {value} must be a positive finite number (scene units)")]
+    GradeZone {
+        /// The width asked for.
+        value: f64,
+    },
     /// A quadrature tolerance that f64 cannot deliver (or outside (0, 1)).
     #[error("quadrature tolerance {value}: must lie in [{min:e}, 1); f64 sums carry a rounding error of about 1e-16, so a smaller tolerance only makes the adaptive rules subdivide every near pair to their depth limit")]
     QuadratureTolerance {

@@ -99,6 +99,8 @@ pub struct SolveReport {
     alpha_auto: bool,
     level: u32,
     max_edge: Option<f64>,
+    /// --grade: exponent, zone and the lines graded towards.
+    grading: Option<GradeReport>,
     elements: usize,
     unknowns: usize,
     h: f64,
@@ -142,6 +144,11 @@ impl SolveReport {
             alpha_auto: s.alpha.auto,
             level: s.cfg.level,
             max_edge: s.cfg.max_edge,
+            grading: s
+                .cfg
+                .grade
+                .as_ref()
+                .map(|g| GradeReport::new(g, &s.problem.surface)),
             elements: disc.mesh().len(),
             unknowns: disc.len(),
             h: out.h,
@@ -204,7 +211,15 @@ impl SolveReport {
             out: written.to_vec(),
             adaptive: None,
             relit: Vec::new(),
-            warnings: super::trust::solve_warnings(s, out),
+            warnings: super::trust::solve_warnings(s, out)
+                .into_iter()
+                .chain(
+                    s.cfg
+                        .grade
+                        .as_ref()
+                        .and_then(|g| GradeReport::new(g, &s.problem.surface).warning()),
+                )
+                .collect(),
             contents: scene.map(|sc| SceneSummary {
                 triangles: sc.triangle_count(),
                 materials: sc.materials.len(),
@@ -352,6 +367,36 @@ fn fmt_estimate(f: &mut fmt::Formatter<'_>, e: &ErrorEstimate, eff: Option<f64>)
     Ok(())
 }
 
+/// How the mesh was graded (--grade).
+#[derive(Clone, Debug, Serialize)]
+pub struct GradeReport {
+    exponent: f64,
+    /// The zone's width D (scene units), the default resolved.
+    zone: f64,
+    /// Segments graded towards (a line found from both of its faces counts twice).
+    lines: usize,
+}
+
+impl GradeReport {
+    fn new(
+        g: &radcol_core::mesh::grading::Grade,
+        surface: &radcol_core::geometry::Surface,
+    ) -> Self {
+        let grading = radcol_core::mesh::grading::Grading::towards_concave_lines(surface, g);
+        Self {
+            exponent: grading.exponent,
+            zone: grading.zone,
+            lines: grading.lines.len(),
+        }
+    }
+
+    fn warning(&self) -> Option<String> {
+        (self.lines == 0).then(|| {
+            "--grade: the scene has no concave edge or contact line between flat faces, so the mesh is not graded".into()
+        })
+    }
+}
+
 impl fmt::Display for SolveReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
@@ -370,6 +415,13 @@ impl fmt::Display for SolveReport {
             "  mesh        {} elements, {} unknowns, h = {:.6}, shape ratio {:.4} .. {:.4}",
             self.elements, self.unknowns, self.h, self.shape_ratio.min, self.shape_ratio.max
         )?;
+        if let Some(g) = &self.grading {
+            writeln!(
+                f,
+                "  grading     q = {} within {:.6} of {} concave edges and contact lines",
+                g.exponent, g.zone, g.lines
+            )?;
+        }
         writeln!(
             f,
             "  problem     ρ = {}, E = {}, exact u = {}",

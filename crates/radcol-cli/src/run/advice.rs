@@ -45,7 +45,14 @@ pub fn sized(err: CoreError, s: &Setup) -> anyhow::Error {
         }
     }
     let unknowns = |level: u32, degree: usize| {
-        mesh_size(&s.problem.surface, level, cfg.max_edge, degree).unknowns
+        mesh_size(
+            &s.problem.surface,
+            level,
+            cfg.max_edge,
+            cfg.grade.as_ref(),
+            degree,
+        )
+        .unknowns
     };
     if let Some(l) = (0..cfg.level)
         .rev()
@@ -78,8 +85,16 @@ pub fn sized(err: CoreError, s: &Setup) -> anyhow::Error {
 /// grows), with its unknowns.
 fn coarsest_edge_that_fits(s: &Setup, h: f64, fit: u64) -> Option<(f64, u64)> {
     let cfg = &s.cfg;
-    let count =
-        |edge: f64| mesh_size(&s.problem.surface, cfg.level, Some(edge), cfg.degree).unknowns;
+    let count = |edge: f64| {
+        mesh_size(
+            &s.problem.surface,
+            cfg.level,
+            Some(edge),
+            cfg.grade.as_ref(),
+            cfg.degree,
+        )
+        .unknowns
+    };
     let (lo_box, hi_box) = s.problem.surface.bounding_box();
     let mut hi = (hi_box - lo_box).length().max(h);
     if count(hi) > fit {

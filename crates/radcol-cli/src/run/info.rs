@@ -72,7 +72,7 @@ fn measured_mesh(job: &Refinement, elements: u64) -> (Arc<Mesh>, u32) {
 }
 
 fn info_report(job: &Refinement, loaded: &Loaded) -> InfoReport {
-    let size = radcol_core::run::mesh_size(&job.surface, job.level, job.max_edge, job.degree);
+    let size = radcol_core::run::mesh_size(&job.surface, job.level, job.max_edge, None, job.degree);
     let (elements, unknowns) = (size.elements, size.unknowns);
     let (mesh, measured_level) = measured_mesh(job, elements);
     // h halves with every level beyond the one measured.

@@ -15,6 +15,7 @@ use crate::scene::SceneSpec;
 use anyhow::{Context, Result};
 use outputs::{error_map, look, output, svg_file};
 use radcol_core::assembly::{QuadratureOptions, VisibilityMode, MIN_QUAD_TOL};
+use radcol_core::mesh::grading::{Grade, GRADE_RANGE};
 use radcol_core::nodes::{check_alpha, check_degree};
 use radcol_core::problem::Field;
 use radcol_core::run::adapt::AdaptOptions;
@@ -74,6 +75,8 @@ pub struct ProblemSpec {
     pub estimate: bool,
     /// Limit negative u_n for display.
     pub limit_negative: bool,
+    /// Grading towards concave lines, when asked for.
+    pub grade: Option<Grade>,
     /// JSON instead of text.
     pub json: bool,
 }
@@ -403,8 +406,25 @@ fn problem(p: &ProblemArgs) -> Result<ProblemSpec> {
         precision,
         estimate: !p.no_estimate,
         limit_negative: !p.keep_negative,
+        grade: p.grade.map(|q| check_grade(q, p.grade_zone)).transpose()?,
         json: p.json,
     })
+}
+
+fn check_grade(q: f64, zone: Option<f64>) -> Result<Grade, BadInput> {
+    if !GRADE_RANGE.contains(&q) {
+        return Err(bad_input(format!(
+            "--grade {q}: the grading exponent must lie in [{}, {}] (1: no grading; 2 suits degree 1)",
+            GRADE_RANGE.start(),
+            GRADE_RANGE.end()
+        )));
+    }
+    if let Some(d) = zone.filter(|d| !(d.is_finite() && *d > 0.0)) {
+        return Err(bad_input(format!(
+            "--grade-zone {d}: the zone's width must be a positive finite number (scene units)"
+        )));
+    }
+    Ok(Grade { exponent: q, zone })
 }
 
 /// `--degree R` in 0..=6 (the range is core's).

@@ -1,6 +1,7 @@
 //! What one solve is asked to do: degree, α, refinement, solver, quadrature.
 
 use crate::assembly::QuadratureOptions;
+use crate::mesh::grading::Grade;
 use crate::progress::ProgressHandle;
 use crate::solve::GmresParams;
 use serde::Serialize;
@@ -35,6 +36,9 @@ pub struct SolveConfig {
     /// After the uniform `level`, refine elements 4:1 until every mapped edge
     /// is at most this long (scene units); None: uniform refinement only.
     pub max_edge: Option<f64>,
+    /// Then grade the mesh towards concave edges and contact lines
+    /// ([`crate::mesh::grading`]; exponent 2 suits r = 1); None: no grading.
+    pub grade: Option<Grade>,
     /// Estimate the error of every channel after the solve
     /// ([`crate::estimate`]): about as much work again as the assembly.
     pub estimate: bool,
@@ -57,6 +61,7 @@ impl Default for SolveConfig {
             quad: QuadratureOptions::default(),
             check_memory: true,
             max_edge: None,
+            grade: None,
             estimate: true,
             limit_negative: true,
             progress: None,

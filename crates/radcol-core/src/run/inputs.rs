@@ -7,6 +7,7 @@ use super::SolveConfig;
 use crate::assembly::MIN_QUAD_TOL;
 use crate::discretization::Discretization;
 use crate::error::{Error, InputError};
+use crate::mesh::grading::{Grading, GRADE_RANGE};
 use crate::mesh::Mesh;
 use crate::nodes::NodeSet;
 use crate::problem::{Field, Problem};
@@ -22,7 +23,28 @@ pub fn check_size(problem: &Problem, cfg: &SolveConfig) -> Result<u64, InputErro
             return Err(InputError::MaxEdge { value: h });
         }
     }
-    let n = mesh_size(&problem.surface, cfg.level, cfg.max_edge, cfg.degree).unknowns;
+    if let Some(grade) = &cfg.grade {
+        let q = grade.exponent;
+        if !GRADE_RANGE.contains(&q) {
+            return Err(InputError::Grade {
+                value: q,
+                range: GRADE_RANGE,
+            });
+        }
+        if let Some(d) = grade.zone {
+            if !(d.is_finite() && d > 0.0) {
+                return Err(InputError::GradeZone { value: d });
+            }
+        }
+    }
+    let n = mesh_size(
+        &problem.surface,
+        cfg.level,
+        cfg.max_edge,
+        cfg.grade.as_ref(),
+        cfg.degree,
+    )
+    .unknowns;
     if cfg.check_memory {
         MemoryEstimate::new(n).check(cfg.solver)?;
     }
@@ -37,9 +59,13 @@ pub fn discretize(problem: &Problem, cfg: &SolveConfig) -> Result<Arc<Discretiza
     let nodes = NodeSet::new(cfg.degree, cfg.alpha)?;
     check_size(problem, cfg)?;
     let surface = &problem.surface;
-    let mesh = Arc::new(match cfg.max_edge {
-        Some(h) => Mesh::with_max_edge(surface.clone(), cfg.level, h),
-        None => Mesh::new(surface.clone(), cfg.level),
+    let mesh = Arc::new(match (&cfg.grade, cfg.max_edge) {
+        (Some(grade), h) => {
+            let grading = Grading::towards_concave_lines(surface, grade);
+            Mesh::graded(surface.clone(), cfg.level, h, &grading)
+        }
+        (None, Some(h)) => Mesh::with_max_edge(surface.clone(), cfg.level, h),
+        (None, None) => Mesh::new(surface.clone(), cfg.level),
     });
     Ok(Arc::new(Discretization::new(mesh, nodes)))
 }

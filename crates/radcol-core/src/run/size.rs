@@ -5,15 +5,32 @@
 use super::SolverKind;
 use crate::error::InputError;
 use crate::geometry::Surface;
-use crate::mesh::Mesh;
+use crate::mesh::grading::{Grade, Grading};
+use crate::mesh::{Mesh, MAX_EDGE_COUNT_CAP};
 use crate::nodes::nodes_per_element;
 use serde::Serialize;
 use std::sync::Arc;
 
-/// Elements of the mesh that uniform `level` and then `max_edge` (when
-/// given, a positive finite length) make of `surface`; saturates at
-/// `u64::MAX`. Counts without building the mesh.
-pub fn elements(surface: &Arc<Surface>, level: u32, max_edge: Option<f64>) -> u64 {
+/// Elements of the mesh that uniform `level`, then `max_edge` (when given,
+/// a positive finite length), then `grade` towards
+/// concave lines ([`Grading`]) make of `surface`; saturates at `u64::MAX`.
+/// Counts without storing the mesh (a graded count builds the ungraded one).
+pub fn elements(
+    surface: &Arc<Surface>,
+    level: u32,
+    max_edge: Option<f64>,
+    grade: Option<&Grade>,
+) -> u64 {
+    if let Some(grade) = grade {
+        let grading = Grading::towards_concave_lines(surface, grade);
+        return Mesh::count_graded(
+            surface.clone(),
+            level,
+            max_edge,
+            &grading,
+            MAX_EDGE_COUNT_CAP,
+        );
+    }
     match max_edge {
         Some(h) => Mesh::count_with_max_edge(surface.clone(), level, h),
         None => (surface.base_triangle_count() as u64).saturating_mul(4u64.saturating_pow(level)),
@@ -29,15 +46,17 @@ pub struct MeshSize {
     pub unknowns: u64,
 }
 
-/// Elements and unknowns at degree r of the mesh that `level` and
-/// `max_edge` make of `surface` (the refinement is counted once).
+/// Elements and unknowns at degree r of the mesh that `level`, `max_edge`
+/// and `grade` make of `surface` ([`elements`]; the refinement is counted
+/// once).
 pub fn mesh_size(
     surface: &Arc<Surface>,
     level: u32,
     max_edge: Option<f64>,
+    grade: Option<&Grade>,
     degree: usize,
 ) -> MeshSize {
-    let elements = elements(surface, level, max_edge);
+    let elements = elements(surface, level, max_edge, grade);
     MeshSize {
         elements,
         unknowns: elements.saturating_mul(nodes_per_element(degree) as u64),

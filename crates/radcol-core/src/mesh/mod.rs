@@ -6,8 +6,11 @@
 //! across patches whose maps agree on shared edges, as the superconvergence
 //! theorems 7 and 9 require.
 
+pub mod grading;
+
 use crate::geometry::{Surface, SurfaceMap};
 use glam::DVec3;
+use grading::Grading;
 use std::sync::Arc;
 
 /// One element Δ_k = F_j(Δ̂_k), with the parameter triangle Δ̂_k = [a, b, c].
@@ -142,6 +145,57 @@ impl Mesh {
             uniform_then_bound(&surface, e, level, max_edge, &mut |_| {
                 count += 1;
                 count <= MAX_EDGE_COUNT_CAP
+            })
+        });
+        if complete {
+            count
+        } else {
+            u64::MAX
+        }
+    }
+
+    /// The mesh of [`Mesh::with_max_edge`] (or [`Mesh::new`] when `max_edge`
+    /// is None) with every element refined further by `grading`.
+    pub fn graded(
+        surface: Arc<Surface>,
+        level: u32,
+        max_edge: Option<f64>,
+        grading: &Grading,
+    ) -> Self {
+        let ungraded = Self::with_max_edge(surface.clone(), level, max_edge.unwrap_or(f64::NAN));
+        let mut elements = Vec::with_capacity(ungraded.len());
+        for e in &ungraded.elements {
+            grading.refine(&surface, *e, &mut |child| {
+                elements.push(child);
+                true
+            });
+        }
+        Self {
+            surface,
+            level,
+            elements,
+        }
+    }
+
+    /// The number of elements of [`Mesh::graded`] with the same arguments,
+    /// or `u64::MAX` when it is above `cap` (counted up to there).
+    pub fn count_graded(
+        surface: Arc<Surface>,
+        level: u32,
+        max_edge: Option<f64>,
+        grading: &Grading,
+        cap: u64,
+    ) -> u64 {
+        let bound = max_edge.unwrap_or(f64::NAN);
+        if Self::count_with_max_edge(surface.clone(), level, bound) > cap {
+            return u64::MAX;
+        }
+        let ungraded = Self::with_max_edge(surface.clone(), level, bound);
+        let mut count = 0u64;
+        let complete = ungraded.elements.iter().all(|e| {
+            grading.refine(&surface, *e, &mut |_| {
+                count += 1;
+                count <= cap
             })
         });
         if complete {
