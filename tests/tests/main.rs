@@ -16,6 +16,7 @@ mod estimate;
 mod gpu_conformance;
 mod gpu_select;
 mod gpu_solve;
+mod hmatrix;
 mod house;
 mod relight;
 mod reuse;

@@ -66,6 +66,7 @@ pub mod error;
 pub mod estimate;
 pub mod expr;
 pub mod geometry;
+pub mod hmatrix;
 pub mod kernel;
 pub mod matrix;
 pub mod mesh;

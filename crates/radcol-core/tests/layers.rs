@@ -24,6 +24,7 @@ const LAYERS: &[&str] = &[
     "discretization",
     "visibility",
     "assembly",
+    "hmatrix",
     "problem",
     "solution",
     "norms",

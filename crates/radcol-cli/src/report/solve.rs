@@ -211,15 +211,7 @@ impl SolveReport {
             out: written.to_vec(),
             adaptive: None,
             relit: Vec::new(),
-            warnings: super::trust::solve_warnings(s, out)
-                .into_iter()
-                .chain(
-                    s.cfg
-                        .grade
-                        .as_ref()
-                        .and_then(|g| GradeReport::new(g, &s.problem.surface).warning()),
-                )
-                .collect(),
+            warnings: warnings(s, out),
             contents: scene.map(|sc| SceneSummary {
                 triangles: sc.triangle_count(),
                 materials: sc.materials.len(),
@@ -365,6 +357,16 @@ fn fmt_estimate(f: &mut fmt::Formatter<'_>, e: &ErrorEstimate, eff: Option<f64>)
         )?;
     }
     Ok(())
+}
+
+/// The trust warnings of `out`, and --grade's when it found nothing to grade
+/// towards.
+fn warnings(s: &Setup, out: &SolveOutcome) -> Vec<String> {
+    let mut w = super::trust::solve_warnings(s, out);
+    if let Some(g) = &s.cfg.grade {
+        w.extend(GradeReport::new(g, &s.problem.surface).warning());
+    }
+    w
 }
 
 /// How the mesh was graded (--grade).

@@ -19,6 +19,8 @@ struct BlockFill<'a, 'i> {
     /// Basis functions per element (columns per element).
     f: usize,
     ncols: usize,
+    /// The element of the block's first column.
+    first: usize,
 }
 
 impl AssemblyPlan {
@@ -98,6 +100,7 @@ impl AssemblyPlan {
             phi: &phi,
             f,
             ncols,
+            first: 0,
         };
         let max_nq = self
             .tables
@@ -142,6 +145,71 @@ impl AssemblyPlan {
     }
 }
 
+impl AssemblyPlan {
+    /// The entries of rows `rows` (local to element `kp`: 0..f_r) and the
+    /// columns of elements `elements`, every pair class as in
+    /// [`AssemblyPlan::fill_block`]: `out` is rows.len() × (elements.len() ·
+    /// f_r), row-major. For the hierarchical matrix's samples. Returns kernel
+    /// evaluations.
+    pub fn fill_part(
+        &self,
+        kp: usize,
+        rows: std::ops::Range<usize>,
+        elements: std::ops::Range<usize>,
+        out: &mut [f64],
+    ) -> u64 {
+        let n = self.disc.mesh().len();
+        let f = self.disc.nodes_per_element();
+        let f_rows = self.rows().nodes_per_element();
+        let ncols = elements.len() * f;
+        debug_assert_eq!(out.len(), rows.len() * ncols);
+        let classes = &self.classes[kp * n..(kp + 1) * n];
+        let integrator = self.integrator();
+        let nodes = self.disc.nodes();
+        let phi = |_k: usize, st: [f64; 2], _q: DVec3, out: &mut [f64]| {
+            nodes.eval_basis(st[0], st[1], out)
+        };
+        let first_row = kp * f_rows;
+        let fill = BlockFill {
+            plan: self,
+            kp,
+            pts: &self.rows().points()[first_row + rows.start..first_row + rows.end],
+            integrator: &integrator,
+            phi: &phi,
+            f,
+            ncols,
+            first: elements.start,
+        };
+        let max_nq = self
+            .tables
+            .iter()
+            .flatten()
+            .map(|t| t.nq)
+            .max()
+            .unwrap_or(0);
+        // Sized to the run, not RUN_CHUNK: samples of one element are common.
+        let mut g = vec![0.0f64; elements.len().min(RUN_CHUNK) * max_nq];
+        let mut evals = 0u64;
+        let mut k = elements.start;
+        while k < elements.end {
+            let class = classes[k];
+            let mut end = k + 1;
+            while end < elements.end && end - k < RUN_CHUNK && classes[end] == class {
+                end += 1;
+            }
+            evals += fill.run(
+                PairClass::from_code(class),
+                k..end,
+                out,
+                FillMode::All,
+                &mut g,
+            );
+            k = end;
+        }
+        evals
+    }
+}
+
 impl BlockFill<'_, '_> {
     /// Fills the columns of elements `run` (one class) in every row of the
     /// block, as far as `mode` asks. Returns kernel evaluations.
@@ -157,8 +225,9 @@ impl BlockFill<'_, '_> {
         let (f, ncols) = (self.f, self.ncols);
         match class {
             PairClass::Culled if mode == FillMode::All => {
+                let (a, b) = ((run.start - self.first) * f, (run.end - self.first) * f);
                 for row in 0..self.pts.len() {
-                    block[row * ncols + run.start * f..row * ncols + run.end * f].fill(0.0);
+                    block[row * ncols + a..row * ncols + b].fill(0.0);
                 }
                 0
             }
@@ -176,6 +245,7 @@ impl BlockFill<'_, '_> {
     #[inline]
     fn slot<'b>(&self, block: &'b mut [f64], row: usize, ke: usize) -> &'b mut [f64] {
         let (f, ncols) = (self.f, self.ncols);
+        let ke = ke - self.first;
         &mut block[row * ncols + ke * f..row * ncols + (ke + 1) * f]
     }
 
@@ -249,7 +319,8 @@ impl BlockFill<'_, '_> {
                 &t.wj[span.clone()],
                 g,
             );
-            let out = &mut block[row * ncols + run.start * f..row * ncols + run.end * f];
+            let (a, b) = ((run.start - self.first) * f, (run.end - self.first) * f);
+            let out = &mut block[row * ncols + a..row * ncols + b];
             contract(g, &t.basis_t, nq, f, out);
         }
         (self.pts.len() * len) as u64

@@ -1,0 +1,336 @@
+//! Hierarchical matrices: the geometric matrix stored in O(N log N) instead of
+//! N², within a requested relative tolerance.
+//!
+//! Rows and columns are ordered by cluster trees ([`cluster`]) so that every
+//! cluster is a contiguous range. The block tree pairs a row cluster τ with a
+//! column cluster σ and stops at
+//! * **zero blocks**, proved zero before any entry is computed
+//!   ([`Entries::is_zero`]: for radiosity, clusters wholly behind each other's
+//!   planes);
+//! * **admissible blocks**, min(diam τ, diam σ) ≤ η dist(τ, σ), where the
+//!   kernel is smooth: approximated by ACA+ and recompressed to the tolerance
+//!   ([`aca`]); a block whose cross grows too large is stored dense;
+//! * **dense leaves**, where both clusters are leaves.
+//!
+//! Each low-rank block is within `tol` of its own Frobenius norm, so the
+//! whole matrix is within `tol` of ‖A‖_F and a product with it within about
+//! `tol` relative. The entries come from an [`Entries`] oracle: the dense
+//! matrix in tests, the assembly's integrators in production.
+
+pub mod aca;
+pub mod cluster;
+pub mod radiosity;
+
+use aca::{aca_plus, recompress, Cross, LowRank};
+use cluster::{Aabb, ClusterTree};
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Where a hierarchical matrix's entries come from.
+pub trait Entries: Sync {
+    /// `out[a * cols.len() + b] = A[rows[a], cols[b]]` (original indices).
+    fn block(&self, rows: &[usize], cols: &[usize], out: &mut [f64]);
+
+    /// True when the block is known to be zero without computing it. The
+    /// default knows nothing.
+    fn is_zero(&self, _rows: &[usize], _row_box: &Aabb, _cols: &[usize], _col_box: &Aabb) -> bool {
+        false
+    }
+
+    /// False when a geometrically admissible block is not smooth and must be
+    /// subdivided instead of compressed (for radiosity: pairs partly hidden
+    /// by an occluder, whose entries jump across shadow lines). The default:
+    /// every admissible block is smooth.
+    fn smooth(&self, _rows: &[usize], _row_box: &Aabb, _cols: &[usize], _col_box: &Aabb) -> bool {
+        true
+    }
+}
+
+/// How a hierarchical matrix is built.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct HOptions {
+    /// Relative tolerance of each low-rank block (Frobenius).
+    pub tol: f64,
+    /// Admissibility η: a block is low rank when min(diam τ, diam σ) ≤ η
+    /// dist(τ, σ). Larger η admits nearer blocks, with higher ranks.
+    pub eta: f64,
+    /// Clusters of at most this many indices are not split.
+    pub leaf_size: usize,
+}
+
+impl Default for HOptions {
+    fn default() -> Self {
+        Self {
+            tol: 1e-6,
+            eta: 1.0,
+            leaf_size: 32,
+        }
+    }
+}
+
+/// One leaf of the block tree: ranges of the row and column orders.
+#[derive(Clone, Debug)]
+struct Leaf {
+    rows: std::ops::Range<usize>,
+    cols: std::ops::Range<usize>,
+    data: LeafData,
+}
+
+#[derive(Clone, Debug)]
+enum LeafData {
+    Zero,
+    /// Row-major.
+    Dense(Vec<f64>),
+    LowRank(LowRank),
+}
+
+/// What the matrix holds, for reports and tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct HStats {
+    /// Rows × columns.
+    pub shape: (usize, usize),
+    /// Leaves proved zero, and the entries they cover.
+    pub zero_blocks: usize,
+    /// Entries in zero blocks.
+    pub zero_entries: u64,
+    /// Dense leaves (including admissible blocks left dense).
+    pub dense_blocks: usize,
+    /// Low-rank leaves.
+    pub low_rank_blocks: usize,
+    /// Admissible blocks whose cross grew too large and were stored dense.
+    pub low_rank_failed: usize,
+    /// The largest rank kept.
+    pub max_rank: usize,
+    /// Numbers stored (dense entries plus (m + n) k per low-rank block).
+    pub stored: u64,
+}
+
+impl HStats {
+    /// Stored numbers over the dense matrix's.
+    pub fn compression(&self) -> f64 {
+        self.stored as f64 / (self.shape.0 as f64 * self.shape.1 as f64).max(1.0)
+    }
+}
+
+/// A hierarchical matrix.
+#[derive(Clone, Debug)]
+pub struct HMatrix {
+    row_order: Vec<usize>,
+    col_order: Vec<usize>,
+    leaves: Vec<Leaf>,
+    stats: HStats,
+}
+
+impl HMatrix {
+    /// Builds the matrix whose rows and columns have these boxes (a point's
+    /// box is the point; a basis function's, its support), sampling
+    /// `entries` (leaves in parallel).
+    pub fn build(
+        row_boxes: &[Aabb],
+        col_boxes: &[Aabb],
+        entries: &dyn Entries,
+        opts: &HOptions,
+    ) -> Self {
+        let rt = ClusterTree::new(row_boxes, opts.leaf_size);
+        let ct = ClusterTree::new(col_boxes, opts.leaf_size);
+        let mut blocks = Vec::new();
+        if !row_boxes.is_empty() && !col_boxes.is_empty() {
+            block_tree(&rt, &ct, 0, 0, opts.eta, entries, &mut blocks);
+        }
+        let leaves: Vec<Leaf> = blocks
+            .par_iter()
+            .map(|&(r, c, admissible)| leaf(&rt, &ct, r, c, admissible, entries, opts.tol))
+            .collect();
+        let mut stats = HStats {
+            shape: (row_boxes.len(), col_boxes.len()),
+            ..Default::default()
+        };
+        for (l, &(_, _, admissible)) in leaves.iter().zip(&blocks) {
+            let (m, n) = (l.rows.len() as u64, l.cols.len() as u64);
+            match &l.data {
+                LeafData::Zero => {
+                    stats.zero_blocks += 1;
+                    stats.zero_entries += m * n;
+                }
+                LeafData::Dense(_) => {
+                    stats.dense_blocks += 1;
+                    stats.low_rank_failed += admissible as usize;
+                    stats.stored += m * n;
+                }
+                LeafData::LowRank(lr) => {
+                    stats.low_rank_blocks += 1;
+                    stats.max_rank = stats.max_rank.max(lr.rank());
+                    stats.stored += (m + n) * lr.rank() as u64;
+                }
+            }
+        }
+        Self {
+            row_order: rt.order,
+            col_order: ct.order,
+            leaves,
+            stats,
+        }
+    }
+
+    /// What it holds.
+    pub fn stats(&self) -> HStats {
+        self.stats
+    }
+
+    /// Heap bytes of the stored numbers and orders.
+    pub fn heap_bytes(&self) -> u64 {
+        8 * (self.stats.stored + (self.row_order.len() + self.col_order.len()) as u64)
+            + (self.leaves.len() * std::mem::size_of::<Leaf>()) as u64
+    }
+
+    /// y = A x (original indices), leaves in parallel.
+    pub fn matvec(&self, x: &[f64], y: &mut [f64]) {
+        let (m, n) = self.stats.shape;
+        assert_eq!((x.len(), y.len()), (n, m), "matvec shapes");
+        let xp: Vec<f64> = self.col_order.iter().map(|&j| x[j]).collect();
+        let yp = self
+            .leaves
+            .par_iter()
+            .fold(
+                || vec![0.0; m],
+                |mut acc, l| {
+                    l.apply_add(&xp, &mut acc);
+                    acc
+                },
+            )
+            .reduce(
+                || vec![0.0; m],
+                |mut a, b| {
+                    a.iter_mut().zip(&b).for_each(|(x, y)| *x += y);
+                    a
+                },
+            );
+        for (p, &i) in self.row_order.iter().enumerate() {
+            y[i] = yp[p];
+        }
+    }
+}
+
+impl Leaf {
+    fn apply_add(&self, xp: &[f64], yp: &mut [f64]) {
+        let x = &xp[self.cols.clone()];
+        let y = &mut yp[self.rows.clone()];
+        match &self.data {
+            LeafData::Zero => {}
+            LeafData::Dense(a) => {
+                let n = x.len();
+                for (yi, row) in y.iter_mut().zip(a.chunks_exact(n)) {
+                    *yi += row.iter().zip(x).map(|(a, b)| a * b).sum::<f64>();
+                }
+            }
+            LeafData::LowRank(lr) => lr.apply_add(x, y),
+        }
+    }
+}
+
+/// The leaves of the block tree under (r, c): (row cluster, column cluster,
+/// admissible). An admissible pair that is not [`Entries::smooth`] is
+/// subdivided like an inadmissible one.
+fn block_tree(
+    rt: &ClusterTree,
+    ct: &ClusterTree,
+    r: usize,
+    c: usize,
+    eta: f64,
+    entries: &dyn Entries,
+    out: &mut Vec<(usize, usize, bool)>,
+) {
+    let (rc, cc) = (&rt.clusters[r], &ct.clusters[c]);
+    let dist = rc.bbox.distance(&cc.bbox);
+    if dist > 0.0
+        && rc.bbox.diameter().min(cc.bbox.diameter()) <= eta * dist
+        && entries.smooth(
+            &rt.order[rc.start..rc.end],
+            &rc.bbox,
+            &ct.order[cc.start..cc.end],
+            &cc.bbox,
+        )
+    {
+        out.push((r, c, true));
+        return;
+    }
+    let mut recurse = |r, c| block_tree(rt, ct, r, c, eta, entries, out);
+    match (rc.children, cc.children) {
+        (None, None) => out.push((r, c, false)),
+        (Some(rs), None) => rs.iter().for_each(|&r| recurse(r, c)),
+        (None, Some(cs)) => cs.iter().for_each(|&c| recurse(r, c)),
+        (Some(rs), Some(cs)) => {
+            for &r in &rs {
+                for &c in &cs {
+                    recurse(r, c);
+                }
+            }
+        }
+    }
+}
+
+fn leaf(
+    rt: &ClusterTree,
+    ct: &ClusterTree,
+    r: usize,
+    c: usize,
+    admissible: bool,
+    entries: &dyn Entries,
+    tol: f64,
+) -> Leaf {
+    let (rc, cc) = (&rt.clusters[r], &ct.clusters[c]);
+    let rows = &rt.order[rc.start..rc.end];
+    let cols = &ct.order[cc.start..cc.end];
+    let data = if entries.is_zero(rows, &rc.bbox, cols, &cc.bbox) {
+        LeafData::Zero
+    } else if admissible {
+        let (m, n) = (rows.len(), cols.len());
+
+        let cross = aca_plus(
+            m,
+            n,
+            tol,
+            &mut |i, out| entries.block(&rows[i..i + 1], cols, out),
+            &mut |j, out| entries.block(rows, &cols[j..j + 1], out),
+        );
+        match cross {
+            Cross::LowRank(lr) => LeafData::LowRank(recompress(&lr, tol)),
+            Cross::Dense => dense(rows, cols, entries),
+        }
+    } else {
+        dense(rows, cols, entries)
+    };
+    Leaf {
+        rows: rc.start..rc.end,
+        cols: cc.start..cc.end,
+        data,
+    }
+}
+
+fn dense(rows: &[usize], cols: &[usize], entries: &dyn Entries) -> LeafData {
+    let mut a = vec![0.0; rows.len() * cols.len()];
+    entries.block(rows, cols, &mut a);
+    LeafData::Dense(a)
+}
+
+impl crate::solve::LinearOperator for HMatrix {
+    fn dim(&self) -> usize {
+        assert_eq!(self.stats.shape.0, self.stats.shape.1, "a square H-matrix");
+        self.stats.shape.0
+    }
+
+    fn apply(&self, x: &[f64], y: &mut [f64]) {
+        self.matvec(x, y);
+    }
+}
+
+impl Entries for crate::matrix::DenseMatrix {
+    fn block(&self, rows: &[usize], cols: &[usize], out: &mut [f64]) {
+        for (a, &i) in rows.iter().enumerate() {
+            let row = self.row(i);
+            for (b, &j) in cols.iter().enumerate() {
+                out[a * cols.len() + b] = row[j];
+            }
+        }
+    }
+}
