@@ -207,13 +207,14 @@ pub struct SolveArgs {
 
     /// Refinement level: each level splits every triangle into 4 (8 elements at level 0 on
     /// a sphere or ellipsoid, 12 on a box, the file's triangles for a scene) [default: 2;
-    /// for a scene with materials given neither --level nor --max-edge: level 0 and
-    /// --max-edge a tenth of its bounding box's diagonal].
+    /// 0 with --max-edge; for a scene with materials given neither --level nor --max-edge:
+    /// level 0 and --max-edge a tenth of its bounding box's diagonal].
     #[arg(long, short = 'l', value_name = "L")]
     pub level: Option<u32>,
 
-    /// After the uniform --level, keep splitting elements 4:1 until no edge is longer than H
-    /// (scene units) [default: uniform refinement only, but see --level].
+    /// After the uniform --level (0 when --level is not given), keep splitting elements 4:1
+    /// until no edge is longer than H (scene units) [default: uniform refinement only, but
+    /// see --level].
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub max_edge: Option<f64>,
 

@@ -99,7 +99,8 @@ pub fn load(spec: &SceneSpec) -> Result<Loaded> {
     Ok(loaded)
 }
 
-/// The level and maximum edge to use: as given, else [`DEFAULT_LEVEL`], or for
+/// The level and maximum edge to use: as given (level 0 under `--max-edge`
+/// alone), else [`DEFAULT_LEVEL`], or for
 /// a scene with materials given neither, level 0 with edges of at most
 /// [`DEFAULT_EDGE_FRACTION`] of its bounding box's diagonal — or, when the
 /// mesh is to be refined `adaptive`ly, the scene's own triangles: the loop
@@ -119,6 +120,10 @@ pub fn default_refinement(
             let (lo, hi) = scene.bounding_box();
             (0, Some(DEFAULT_EDGE_FRACTION * (hi - lo).length()))
         }
+        // --max-edge alone refines the scene's own triangles to H: a uniform
+        // level under it would only add elements the bound does not ask for
+        // (it used to be level 2, silently: 16x the triangles first).
+        (None, Some(h), _) => (0, Some(h)),
         (level, max_edge, _) => (level.unwrap_or(DEFAULT_LEVEL), max_edge),
     }
 }

@@ -1325,3 +1325,21 @@ fn grade_refines_towards_concave_edges_and_contact_lines() {
     .unwrap();
     assert!(text.contains("grading     q = 2 within 139"), "{text}");
 }
+
+/// --max-edge alone refines the surface's own triangles (level 0), not a
+/// uniform level 2 first: the same mesh as --level 0 --max-edge H, and
+/// fewer elements than --level 2 --max-edge H where the bound is coarse.
+#[test]
+fn max_edge_alone_starts_from_level_zero() {
+    let info = |extra: &[&str]| {
+        let mut a = vec!["info", "sphere", "--json"];
+        a.extend_from_slice(extra);
+        stdout_json(&radcol(&a))
+    };
+    let alone = info(&["--max-edge", "1.3"]);
+    let zero = info(&["--level", "0", "--max-edge", "1.3"]);
+    let two = info(&["--level", "2", "--max-edge", "1.3"]);
+    assert_eq!(alone["level"], 0);
+    assert_eq!(alone["elements"], zero["elements"]);
+    assert!(alone["elements"].as_u64() < two["elements"].as_u64());
+}

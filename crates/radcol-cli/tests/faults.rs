@@ -429,7 +429,7 @@ fn flag_cases() -> Vec<Case> {
                 2,
                 &[
                     "more than 4 million",
-                    "this run: --level 2 --max-edge",
+                    "this run: --level 0 --max-edge",
                     "unknowns fit: --max-edge",
                 ],
             ),
