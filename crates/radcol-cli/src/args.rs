@@ -44,6 +44,17 @@ pub enum Command {
     Nodes(NodesArgs),
     /// Describe a scene's mesh at a level: elements, h, shape ratios, area, unknowns, memory.
     Info(InfoArgs),
+    /// Print a completion script for a shell (for example `radcol completions bash >
+    /// ~/.local/share/bash-completion/completions/radcol`).
+    Completions(CompletionsArgs),
+}
+
+/// `radcol completions`.
+#[derive(Debug, clap::Args)]
+pub struct CompletionsArgs {
+    /// The shell.
+    #[arg(value_enum)]
+    pub shell: clap_complete::Shell,
 }
 
 /// Which linear solver.

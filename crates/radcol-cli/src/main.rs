@@ -94,7 +94,7 @@ fn try_main() -> anyhow::Result<()> {
             }
             ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
                 return Err(error::bad_input(
-                    "a command is needed: radcol solve|study|nodes|info (see radcol --help)",
+                    "a command is needed: radcol solve|study|nodes|info|completions (see radcol --help)",
                 )
                 .into())
             }

@@ -1343,3 +1343,29 @@ fn max_edge_alone_starts_from_level_zero() {
     assert_eq!(alone["elements"], zero["elements"]);
     assert!(alone["elements"].as_u64() < two["elements"].as_u64());
 }
+
+/// `radcol completions SHELL` prints a script that the shell accepts and
+/// that knows the subcommands and their options.
+#[test]
+fn completions_for_bash_and_zsh() {
+    let bash = String::from_utf8(radcol_ok(&["completions", "bash"]).stdout).unwrap();
+    for word in ["solve", "study", "--grade", "--target-error", "--threads"] {
+        assert!(bash.contains(word), "bash completion lacks {word}");
+    }
+    let dir = scratch("completions");
+    let file = dir.join("radcol.bash");
+    std::fs::write(&file, &bash).unwrap();
+    let check = std::process::Command::new("bash")
+        .arg("-n")
+        .arg(&file)
+        .status()
+        .unwrap();
+    assert!(check.success(), "bash -n rejects the script");
+    let zsh = String::from_utf8(radcol_ok(&["completions", "zsh"]).stdout).unwrap();
+    assert!(
+        zsh.starts_with("#compdef radcol"),
+        "{}",
+        &zsh[..40.min(zsh.len())]
+    );
+    assert_one_line_error(&["completions", "tcsh"], 2, &["tcsh", "bash"]);
+}

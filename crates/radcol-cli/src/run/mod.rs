@@ -33,6 +33,12 @@ pub fn run(config: Config) -> Result<()> {
         Config::Study(job) => run_study(job, &mut w),
         Config::Nodes(job) => run_nodes(job, &mut w),
         Config::Info(job) => info::run_info(job, &mut w),
+        Config::Completions(shell) => {
+            use clap::CommandFactory;
+            let mut cmd = crate::args::Cli::command();
+            clap_complete::generate(shell, &mut cmd, "radcol", &mut w);
+            Ok(())
+        }
     }?;
     w.flush()?;
     Ok(())

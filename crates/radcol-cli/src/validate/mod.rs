@@ -35,6 +35,8 @@ pub enum Config {
     Nodes(NodesJob),
     /// `radcol info`.
     Info(InfoJob),
+    /// `radcol completions`: the script for this shell.
+    Completions(clap_complete::Shell),
 }
 
 /// The node parameter as asked for.
@@ -151,6 +153,7 @@ impl Config {
             Command::Study(a) => Config::Study(study_job(a)?),
             Command::Nodes(a) => Config::Nodes(nodes_job(a)?),
             Command::Info(a) => Config::Info(info_job(a)?),
+            Command::Completions(a) => Config::Completions(a.shell),
         })
     }
 }
