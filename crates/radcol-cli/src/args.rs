@@ -79,6 +79,15 @@ pub enum BackendArg {
     Auto,
 }
 
+/// What an MTL file's `Ke` means.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum KeArg {
+    /// Emitted flux per unit area (W/m², the E of the radiosity equation): Ke as given.
+    Exitance,
+    /// Emitted radiance (W/m²/sr, as path tracers read it): E = π Ke for a diffuse emitter.
+    Radiance,
+}
+
 /// How partly visible element pairs are integrated in scenes that occlude.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum VisibilityArg {
@@ -143,6 +152,12 @@ pub struct ProblemArgs {
     /// units) [default: a quarter of the scene's largest extent].
     #[arg(long, value_name = "D", allow_hyphen_values = true, requires = "grade")]
     pub grade_zone: Option<f64>,
+
+    /// How a scene's MTL `Ke` is read: as the exitance E of the equation (radiosity units,
+    /// radcol's convention), or as radiance (renderers' convention: E = π Ke). The reported u
+    /// is radiosity either way; u/π is its radiance.
+    #[arg(long, value_enum, default_value_t = KeArg::Exitance)]
+    pub ke: KeArg,
 
     /// Linear solver.
     #[arg(long, value_enum, default_value_t = SolverArg::Gmres)]

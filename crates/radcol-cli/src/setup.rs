@@ -75,6 +75,8 @@ pub struct Setup {
     pub exact: Option<String>,
     /// JSON instead of text.
     pub json: bool,
+    /// The factor from the materials' Ke to E (`--ke`).
+    pub ke_scale: f64,
 }
 
 impl std::fmt::Debug for Setup {
@@ -150,7 +152,11 @@ pub fn setup(
     let (rho_text, emission_text) = match (&loaded, &p.emission, &p.exact) {
         (Loaded::Scene(_), _, _) => (
             "Kd of the materials (R, G, B)".to_string(),
-            "Ke of the materials (R, G, B)".to_string(),
+            if p.ke_scale == 1.0 {
+                "Ke of the materials (R, G, B)".to_string()
+            } else {
+                "π Ke of the materials (R, G, B; Ke read as radiance)".to_string()
+            },
         ),
         (_, Some((e, _)), _) => (p.rho.0.clone(), e.clone()),
         (_, None, Some(_)) => (p.rho.0.clone(), "manufactured: u - K u".to_string()),
@@ -158,7 +164,13 @@ pub fn setup(
     };
     let rho = p.rho.1.clone();
     let problem = match (&p.emission, &p.exact) {
-        _ if loaded.scene().is_some() => loaded.scene().expect("checked").problem(),
+        _ if loaded.scene().is_some() => {
+            let mut problem = loaded.scene().expect("checked").problem();
+            if p.ke_scale != 1.0 {
+                problem.scale_emission(p.ke_scale);
+            }
+            problem
+        }
         (None, Some((_, u))) => Problem::manufactured(
             surface.clone(),
             rho,
@@ -197,6 +209,7 @@ pub fn setup(
         emission: emission_text,
         exact: p.exact.as_ref().map(|(t, _)| t.clone()),
         json: p.json,
+        ke_scale: p.ke_scale,
     })
 }
 

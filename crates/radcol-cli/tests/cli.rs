@@ -1369,3 +1369,51 @@ fn completions_for_bash_and_zsh() {
     );
     assert_one_line_error(&["completions", "tcsh"], 2, &["tcsh", "bash"]);
 }
+
+/// `--ke radiance` reads the MTL's Ke as radiance: E = π Ke, so every
+/// channel's ∫E and (the equation being linear) ∫u are π times those of
+/// the default reading, and the report says which reading it used.
+#[test]
+fn ke_as_radiance_multiplies_the_emission_by_pi() {
+    let run = |ke: &str| {
+        stdout_json(&radcol_ok(&[
+            "solve",
+            "cornell",
+            "-l",
+            "0",
+            "--no-estimate",
+            "--ke",
+            ke,
+            "--json",
+        ]))
+    };
+    let (e, r) = (run("exitance"), run("radiance"));
+    for c in 0..3 {
+        for key in ["integral_e", "integral_u"] {
+            let (a, b) = (
+                e["channels"][c][key].as_f64().unwrap(),
+                r["channels"][c][key].as_f64().unwrap(),
+            );
+            radcol_core::assert_close!(b, std::f64::consts::PI * a, 1e-12 * b);
+        }
+    }
+    let text = String::from_utf8(
+        radcol_ok(&[
+            "solve",
+            "cornell",
+            "-l",
+            "0",
+            "--no-estimate",
+            "--ke",
+            "radiance",
+        ])
+        .stdout,
+    )
+    .unwrap();
+    assert!(text.contains("Ke read as radiance"), "{text}");
+    assert_one_line_error(
+        &["solve", "sphere", "--ke", "radiance"],
+        2,
+        &["--ke radiance", "no materials"],
+    );
+}

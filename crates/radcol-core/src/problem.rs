@@ -40,6 +40,18 @@ impl fmt::Debug for Field {
 }
 
 impl Field {
+    /// The field times `k`.
+    pub fn scaled(&self, k: f64) -> Field {
+        match self {
+            Field::Constant(v) => Field::Constant(k * v),
+            Field::PerPatch(v) => Field::PerPatch(Arc::new(v.iter().map(|x| k * x).collect())),
+            other => {
+                let f = other.clone();
+                Field::Custom(Arc::new(move |site: &Site| k * f.eval(site)))
+            }
+        }
+    }
+
     /// Parses an expression; a plain number becomes a [`Field::Constant`].
     pub fn parse(text: &str) -> Result<Self, crate::error::InputError> {
         if let Ok(v) = text.trim().parse::<f64>() {
@@ -104,6 +116,14 @@ pub struct Problem {
 }
 
 impl Problem {
+    /// Multiplies every channel's emission by `k` (for example π, to read
+    /// emission given as radiance as the exitance the equation takes).
+    pub fn scale_emission(&mut self, k: f64) {
+        for c in &mut self.channels {
+            c.emission = c.emission.scaled(k);
+        }
+    }
+
     /// A single-channel problem with given ρ and E.
     pub fn new(surface: Arc<Surface>, rho: Field, emission: Field) -> Self {
         Self {

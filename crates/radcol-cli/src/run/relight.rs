@@ -59,7 +59,10 @@ pub fn relit_problems(specs: &[String], s: &Setup) -> Result<Vec<Problem>> {
     specs
         .iter()
         .map(|spec| match s.loaded.scene() {
-            Some(scene) => scene_problem(spec, scene),
+            Some(scene) => scene_problem(spec, scene).map(|mut p| {
+                p.scale_emission(s.ke_scale);
+                p
+            }),
             None => {
                 let e = Field::parse(spec)
                     .map_err(|e| bad_input(format!("--relight '{spec}': {e}")))?;

@@ -7,8 +7,8 @@ mod outputs;
 pub use outputs::{LookSpec, Output, OutputFile, OutputKind};
 
 use crate::args::{
-    BackendArg, Cli, Command, InfoArgs, NodesArgs, PrecisionArg, ProblemArgs, SolveArgs, SolverArg,
-    StudyArgs, VisibilityArg,
+    BackendArg, Cli, Command, InfoArgs, KeArg, NodesArgs, PrecisionArg, ProblemArgs, SolveArgs,
+    SolverArg, StudyArgs, VisibilityArg,
 };
 use crate::error::{bad_input, BadInput};
 use crate::scene::SceneSpec;
@@ -79,6 +79,8 @@ pub struct ProblemSpec {
     pub limit_negative: bool,
     /// Grading towards concave lines, when asked for.
     pub grade: Option<Grade>,
+    /// The factor from the materials' Ke to E (1, or π with `--ke radiance`).
+    pub ke_scale: f64,
     /// JSON instead of text.
     pub json: bool,
 }
@@ -338,6 +340,13 @@ fn problem(p: &ProblemArgs) -> Result<ProblemSpec> {
             }
         }
     }
+    if p.ke == KeArg::Radiance && !scene.has_materials() {
+        return Err(bad_input(format!(
+            "--ke radiance: '{}' has no materials; --ke says how an MTL file's Ke is read (use --emission for a surface)",
+            p.scene.trim()
+        ))
+        .into());
+    }
     let degree = degree(p.degree)?;
     let alpha = parse_alpha(&p.alpha)?;
     let tol = open_unit("--tol", p.tol)?;
@@ -410,6 +419,10 @@ fn problem(p: &ProblemArgs) -> Result<ProblemSpec> {
         estimate: !p.no_estimate,
         limit_negative: !p.keep_negative,
         grade: p.grade.map(|q| check_grade(q, p.grade_zone)).transpose()?,
+        ke_scale: match p.ke {
+            KeArg::Exitance => 1.0,
+            KeArg::Radiance => std::f64::consts::PI,
+        },
         json: p.json,
     })
 }
