@@ -2,20 +2,21 @@
 //! device opened, no number computed beyond parsing. Every value that can be
 //! rejected from its text alone is rejected here, with the flag's name.
 
+mod mesh;
 mod outputs;
 
 pub use outputs::{LookSpec, Output, OutputFile, OutputKind};
 
 use crate::args::{
-    BackendArg, Cli, Command, InfoArgs, KeArg, NodesArgs, PrecisionArg, ProblemArgs, SolveArgs,
-    SolverArg, StudyArgs, VisibilityArg,
+    BackendArg, Cli, Command, InfoArgs, NodesArgs, PrecisionArg, ProblemArgs, SolveArgs, SolverArg,
+    StudyArgs, VisibilityArg,
 };
 use crate::error::{bad_input, BadInput};
 use crate::scene::SceneSpec;
 use anyhow::{Context, Result};
 use outputs::{error_map, look, output, svg_file};
 use radcol_core::assembly::{QuadratureOptions, VisibilityMode, MIN_QUAD_TOL};
-use radcol_core::mesh::grading::{Grade, GRADE_RANGE};
+use radcol_core::mesh::grading::Grade;
 use radcol_core::nodes::{check_alpha, check_degree};
 use radcol_core::problem::Field;
 use radcol_core::run::adapt::AdaptOptions;
@@ -169,7 +170,7 @@ fn solve_job(a: SolveArgs) -> Result<SolveJob> {
         }
         outputs.push(output);
     }
-    let max_edge = a.max_edge.map(check_max_edge).transpose()?;
+    let max_edge = a.max_edge.map(mesh::check_max_edge).transpose()?;
     let problem = problem(&a.problem)?;
     if let Some(p) = &a.error_map {
         if !problem.estimate {
@@ -233,15 +234,6 @@ fn adapt(
         max_unknowns,
         ..Default::default()
     })
-}
-
-fn check_max_edge(h: f64) -> Result<f64, BadInput> {
-    if !(h.is_finite() && h > 0.0) {
-        return Err(bad_input(format!(
-            "--max-edge {h}: the maximum edge length must be a positive finite number (scene units)"
-        )));
-    }
-    Ok(h)
 }
 
 fn study_job(a: StudyArgs) -> Result<StudyJob> {
@@ -311,7 +303,7 @@ fn nodes_job(a: NodesArgs) -> Result<NodesJob> {
 fn info_job(a: InfoArgs) -> Result<InfoJob> {
     let scene = SceneSpec::parse(&a.scene)?;
     let degree = degree(a.degree)?;
-    let max_edge = a.max_edge.map(check_max_edge).transpose()?;
+    let max_edge = a.max_edge.map(mesh::check_max_edge).transpose()?;
     Ok(InfoJob {
         scene,
         max_edge,
@@ -324,29 +316,7 @@ fn info_job(a: InfoArgs) -> Result<InfoJob> {
 /// The shared options of `solve` and `study`.
 fn problem(p: &ProblemArgs) -> Result<ProblemSpec> {
     let scene = SceneSpec::parse(&p.scene)?;
-    if scene.has_materials() {
-        for (flag, given) in [
-            ("--rho", p.rho.is_some()),
-            ("--emission", p.emission.is_some()),
-            ("--exact", p.exact.is_some()),
-        ] {
-            if given {
-                return Err(bad_input(format!(
-                    "{flag}: scene '{}' takes ρ and E from its materials (Kd, Ke) and has no known \
-                     exact solution; {flag} applies to the analytic surfaces (sphere, ellipsoid, box)",
-                    p.scene.trim()
-                ))
-                .into());
-            }
-        }
-    }
-    if p.ke == KeArg::Radiance && !scene.has_materials() {
-        return Err(bad_input(format!(
-            "--ke radiance: '{}' has no materials; --ke says how an MTL file's Ke is read (use --emission for a surface)",
-            p.scene.trim()
-        ))
-        .into());
-    }
+    mesh::scene_flags(p, &scene)?;
     let degree = degree(p.degree)?;
     let alpha = parse_alpha(&p.alpha)?;
     let tol = open_unit("--tol", p.tol)?;
@@ -418,29 +388,13 @@ fn problem(p: &ProblemArgs) -> Result<ProblemSpec> {
         precision,
         estimate: !p.no_estimate,
         limit_negative: !p.keep_negative,
-        grade: p.grade.map(|q| check_grade(q, p.grade_zone)).transpose()?,
-        ke_scale: match p.ke {
-            KeArg::Exitance => 1.0,
-            KeArg::Radiance => std::f64::consts::PI,
-        },
+        grade: p
+            .grade
+            .map(|q| mesh::check_grade(q, p.grade_zone))
+            .transpose()?,
+        ke_scale: mesh::ke_scale(p.ke),
         json: p.json,
     })
-}
-
-fn check_grade(q: f64, zone: Option<f64>) -> Result<Grade, BadInput> {
-    if !GRADE_RANGE.contains(&q) {
-        return Err(bad_input(format!(
-            "--grade {q}: the grading exponent must lie in [{}, {}] (1: no grading; 2 suits degree 1)",
-            GRADE_RANGE.start(),
-            GRADE_RANGE.end()
-        )));
-    }
-    if let Some(d) = zone.filter(|d| !(d.is_finite() && *d > 0.0)) {
-        return Err(bad_input(format!(
-            "--grade-zone {d}: the zone's width must be a positive finite number (scene units)"
-        )));
-    }
-    Ok(Grade { exponent: q, zone })
 }
 
 /// `--degree R` in 0..=6 (the range is core's).
