@@ -95,13 +95,9 @@ impl Mesh {
         if !is_edge_bound(max_edge) {
             return uniform;
         }
-        let mut elements = Vec::with_capacity(uniform.len());
-        for e in &uniform.elements {
-            refine_to_max_edge(&surface, *e, max_edge, &mut |child| {
-                elements.push(child);
-                true
-            });
-        }
+        let elements = collect_refined(&uniform.elements, |e, visit| {
+            refine_to_max_edge(&surface, e, max_edge, visit)
+        });
         Self {
             surface,
             level,
@@ -163,13 +159,9 @@ impl Mesh {
         grading: &Grading,
     ) -> Self {
         let ungraded = Self::with_max_edge(surface.clone(), level, max_edge.unwrap_or(f64::NAN));
-        let mut elements = Vec::with_capacity(ungraded.len());
-        for e in &ungraded.elements {
-            grading.refine(&surface, *e, &mut |child| {
-                elements.push(child);
-                true
-            });
-        }
+        let elements = collect_refined(&ungraded.elements, |e, visit| {
+            grading.refine(&surface, e, visit)
+        });
         Self {
             surface,
             level,
@@ -425,6 +417,22 @@ impl Element {
 
 /// [`Mesh::count_with_max_edge`] gives up (returns `u64::MAX`) above this many elements.
 pub const MAX_EDGE_COUNT_CAP: u64 = 1 << 22;
+
+/// The leaves of `refine` (a depth-first refinement calling its visitor on
+/// each leaf) over every element of `elements`, in order.
+fn collect_refined(
+    elements: &[Element],
+    refine: impl Fn(Element, &mut dyn FnMut(Element) -> bool) -> bool,
+) -> Vec<Element> {
+    let mut out = Vec::with_capacity(elements.len());
+    for e in elements {
+        refine(*e, &mut |child| {
+            out.push(child);
+            true
+        });
+    }
+    out
+}
 
 fn is_edge_bound(max_edge: f64) -> bool {
     max_edge.is_finite() && max_edge > 0.0

@@ -102,13 +102,7 @@ impl AssemblyPlan {
             ncols,
             first: 0,
         };
-        let max_nq = self
-            .tables
-            .iter()
-            .flatten()
-            .map(|t| t.nq)
-            .max()
-            .unwrap_or(0);
+        let max_nq = self.max_nq();
         let mut g = vec![0.0f64; RUN_CHUNK * max_nq];
         // Columns whose entries are the previous matrix's (FillMode::NotReused).
         let unchanged = self.unchanged.as_deref().filter(|u| u.old(kp).is_some());
@@ -146,6 +140,17 @@ impl AssemblyPlan {
 }
 
 impl AssemblyPlan {
+    /// The most rule points per element of any far table (the size of a
+    /// run's kernel buffer per element).
+    fn max_nq(&self) -> usize {
+        self.tables
+            .iter()
+            .flatten()
+            .map(|t| t.nq)
+            .max()
+            .unwrap_or(0)
+    }
+
     /// The entries of rows `rows` (local to element `kp`: 0..f_r) and the
     /// columns of elements `elements`, every pair class as in
     /// [`AssemblyPlan::fill_block`]: `out` is rows.len() × (elements.len() ·
@@ -180,13 +185,7 @@ impl AssemblyPlan {
             ncols,
             first: elements.start,
         };
-        let max_nq = self
-            .tables
-            .iter()
-            .flatten()
-            .map(|t| t.nq)
-            .max()
-            .unwrap_or(0);
+        let max_nq = self.max_nq();
         // Sized to the run, not RUN_CHUNK: samples of one element are common.
         let mut g = vec![0.0f64; elements.len().min(RUN_CHUNK) * max_nq];
         let mut evals = 0u64;

@@ -183,6 +183,8 @@ pub fn solve_adaptive(
     // mesh: pairs of unchanged elements are neither classified nor
     // integrated again.
     let mut previous: Option<(SolveOutcome, Plans, Arc<Unchanged>)> = None;
+    // The previous step's singular points, for a stop before this step ends.
+    let mut pending_singular = Vec::new();
     loop {
         let t = Instant::now();
         let prev = previous
@@ -192,7 +194,7 @@ pub fn solve_adaptive(
                 plans,
                 unchanged: unchanged.clone(),
             });
-        let (out, plans) = solve_step(
+        let result = solve_step(
             problem,
             &cfg,
             mesh.clone(),
@@ -200,8 +202,24 @@ pub fn solve_adaptive(
             guess.as_deref(),
             prev.as_ref(),
             true,
-        )?;
+        );
         drop(prev);
+        let (out, plans) = match result {
+            Ok(step) => step,
+            // The step's peak (matrix, check rows, solver) would not fit,
+            // although the budget let its matrices in: the previous step's
+            // answer stands, as at any other budget stop.
+            Err(Error::Input(InputError::PeakTooLarge { .. })) if previous.is_some() => {
+                let (outcome, _, _) = previous.take().expect("checked");
+                return Ok(AdaptOutcome {
+                    outcome,
+                    steps,
+                    stop: StopReason::Memory,
+                    singular: pending_singular,
+                });
+            }
+            Err(e) => return Err(e),
+        };
         // The previous solve has served: its matrix goes before the next one.
         drop(previous.take());
         let (indicator, negative) = indicators(&out);
@@ -229,11 +247,11 @@ pub fn solve_adaptive(
         step.split = split;
         on_step(&step);
         steps.push(step);
+        let left: Vec<usize> = (0..indicator.len())
+            .filter(|&k| frozen(k) && indicator[k] > opts.target)
+            .collect();
+        let singular = singular_points(out.discretization.mesh(), &left, &indicator);
         if let Some(stop) = stop {
-            let left: Vec<usize> = (0..indicator.len())
-                .filter(|&k| frozen(k) && indicator[k] > opts.target)
-                .collect();
-            let singular = singular_points(out.discretization.mesh(), &left, &indicator);
             return Ok(AdaptOutcome {
                 outcome: out,
                 steps,
@@ -254,6 +272,7 @@ pub fn solve_adaptive(
             .collect();
         let unchanged = Arc::new(Unchanged::new(&old_of, mesh.len()));
         previous = Some((out, plans, unchanged));
+        pending_singular = singular;
         mesh = Arc::new(refined);
     }
 }
@@ -332,15 +351,16 @@ fn mark(indicator: &[f64], threshold: f64, frozen: &dyn Fn(usize) -> bool) -> Ve
 }
 
 /// While a step assembles, solves and estimates, the previous step's matrix
-/// and plans are still held, and the step's own plans and estimate come on
-/// top of its matrix: on the box room going from 28 410 to 41 235 unknowns
-/// the process reached 24.3 GB for 6.5 + 13.6 GB of matrices, and the kernel
-/// killed it (the budget then allowed the new matrix 0.9 of the memory
-/// available); allowed 0.7, it went to 36 231 unknowns and peaked at 21.8 GB
-/// for 6.5 + 10.5 GB. So a step's matrices (the LU copy included) may take
-/// at most this fraction of the memory available when the step is planned
-/// (the current matrix already counts as used then).
-const STEP_MEMORY_FRACTION: f64 = 0.6;
+/// and plans are still held (they count as used in the memory available when
+/// the step is planned), and the step's matrix, its linear solver's working
+/// memory (an LU factorisation: one more matrix) or its estimate's check rows
+/// (f_c of them per element against N columns: twice the matrix at r = 1),
+/// the larger, come on top. Those may take at most this fraction of the
+/// memory available. Counting the matrix alone (at 0.6) let the Cornell box
+/// to 1e-4 plan a step of 10.2 GiB whose check rows needed 22.8 GiB more,
+/// which the step's own peak check then refused; such a refusal now also ends
+/// the loop with the previous step's answer.
+const STEP_MEMORY_FRACTION: f64 = 0.8;
 
 /// How many of the `marked` elements may be split (each adds 3 elements of
 /// `f` unknowns), or why none may.
@@ -352,10 +372,16 @@ fn budget(
     marked: usize,
 ) -> Result<usize, StopReason> {
     let available = available_memory();
-    let copies = match cfg.solver {
-        crate::run::SolverKind::Gmres => 1.0,
-        crate::run::SolverKind::Lu => 2.0,
+    let solver = match cfg.solver {
+        crate::run::SolverKind::Gmres => 0.0,
+        crate::run::SolverKind::Lu => 1.0,
     };
+    let check = if cfg.estimate {
+        crate::estimate::check_nodes(cfg.degree, cfg.alpha).len() as f64 / f as f64
+    } else {
+        0.0
+    };
+    let copies = 1.0 + f64::max(solver, check);
     let fits_memory = |n: u64| {
         let bytes = copies * 8.0 * (n as f64).powi(2);
         !cfg.check_memory || available.is_none_or(|a| bytes <= STEP_MEMORY_FRACTION * a as f64)
