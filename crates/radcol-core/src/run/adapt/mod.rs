@@ -227,23 +227,15 @@ pub fn solve_adaptive(
         let frozen = |k: usize| history.frozen(k, &stalls, opts.max_depth, opts.stall_generations);
         let mut step = describe(&out, &indicator, &negative, &frozen, opts);
         step.seconds = t.elapsed().as_secs_f64();
-        let estimate = step.estimate;
-        let threshold = opts.mark_fraction * opts.target;
-        let stop = if estimate <= opts.target {
-            Some(StopReason::Reached)
-        } else if steps.len() + 1 >= opts.max_steps {
-            Some(StopReason::MaxSteps)
-        } else {
-            None
-        };
-        let marked = match stop {
-            Some(_) => Vec::new(),
-            None => mark(&indicator, threshold, &frozen),
-        };
-        let stop = stop.or((marked.is_empty()).then_some(StopReason::Singular));
-        let budget = budget(opts, &cfg, mesh.len(), f, marked.len());
-        let stop = stop.or(budget.err());
-        let split = budget.map_or(0, |m| m.min(marked.len()));
+        let (stop, marked, split) = decide(
+            opts,
+            &cfg,
+            step.estimate,
+            steps.len() + 1,
+            &indicator,
+            &frozen,
+            f,
+        );
         step.split = split;
         on_step(&step);
         steps.push(step);
@@ -275,6 +267,36 @@ pub fn solve_adaptive(
         pending_singular = singular;
         mesh = Arc::new(refined);
     }
+}
+
+/// Whether the loop stops after its `step`-th step (estimate `estimate`),
+/// the elements marked for splitting (worst first) and how many of them the
+/// budget lets split.
+fn decide(
+    opts: &AdaptOptions,
+    cfg: &SolveConfig,
+    estimate: f64,
+    step: usize,
+    indicator: &[f64],
+    frozen: &dyn Fn(usize) -> bool,
+    f: usize,
+) -> (Option<StopReason>, Vec<usize>, usize) {
+    let stop = if estimate <= opts.target {
+        Some(StopReason::Reached)
+    } else if step >= opts.max_steps {
+        Some(StopReason::MaxSteps)
+    } else {
+        None
+    };
+    let marked = match stop {
+        Some(_) => Vec::new(),
+        None => mark(indicator, opts.mark_fraction * opts.target, frozen),
+    };
+    let stop = stop.or((marked.is_empty()).then_some(StopReason::Singular));
+    let budget = budget(opts, cfg, indicator.len(), f, marked.len());
+    let stop = stop.or(budget.err());
+    let split = budget.map_or(0, |m| m.min(marked.len()));
+    (stop, marked, split)
 }
 
 /// The step of `out` (its element `indicator`s, where u_n is `negative`,
