@@ -253,20 +253,29 @@ pub fn solve_adaptive(
         }
         let (refined, parents) = refine(&mesh, &marked[..split]);
         guess = Some(transfer(&out, &refined, &parents));
-        let mut split_mark = vec![false; mesh.len()];
-        for &k in &marked[..split] {
-            split_mark[k] = true;
-        }
+        let split_mark = marks(mesh.len(), &marked[..split]);
         history = history.refined(&parents, &split_mark, &indicator, &stalls);
-        let old_of: Vec<Option<usize>> = parents
-            .iter()
-            .map(|&p| (!split_mark[p]).then_some(p))
-            .collect();
-        let unchanged = Arc::new(Unchanged::new(&old_of, mesh.len()));
+        let unchanged = Arc::new(unchanged_of(&parents, &split_mark));
         previous = Some((out, plans, unchanged));
         pending_singular = singular;
         mesh = Arc::new(refined);
     }
+}
+
+/// `n` flags, set at `split`.
+fn marks(n: usize, split: &[usize]) -> Vec<bool> {
+    let mut m = vec![false; n];
+    for &k in split {
+        m[k] = true;
+    }
+    m
+}
+
+/// Which elements of the refined mesh (each with its `parents` element) are
+/// elements of the old one: those whose parent was not split.
+fn unchanged_of(parents: &[usize], split: &[bool]) -> Unchanged {
+    let old_of: Vec<Option<usize>> = parents.iter().map(|&p| (!split[p]).then_some(p)).collect();
+    Unchanged::new(&old_of, split.len())
 }
 
 /// Whether the loop stops after its `step`-th step (estimate `estimate`),
