@@ -29,6 +29,11 @@ pub struct Cli {
     /// else one per logical CPU].
     #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
     pub threads: Option<u16>,
+
+    /// No progress bar and no adaptive step lines on stderr (warnings and errors still
+    /// print there; the report on stdout is unchanged).
+    #[arg(long, short = 'q', global = true)]
+    pub quiet: bool,
 }
 
 /// The subcommands.

@@ -101,6 +101,7 @@ fn try_main() -> anyhow::Result<()> {
             _ => return Err(error::bad_input(error::clap_one_line(&e)).into()),
         },
     };
+    progress::set_quiet(cli.quiet);
     if let Some(n) = cli.threads {
         // Before any parallel work: the global pool is built once.
         rayon::ThreadPoolBuilder::new()

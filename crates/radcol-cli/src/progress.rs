@@ -11,10 +11,23 @@ use std::time::Duration;
 #[derive(Clone)]
 pub struct Bar(ProgressBar);
 
+/// Set by `--quiet`: no bar and no status lines on stderr.
+static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// `--quiet` (set once, before any work).
+pub fn set_quiet(quiet: bool) {
+    QUIET.store(quiet, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// True under `--quiet`.
+pub fn quiet() -> bool {
+    QUIET.load(std::sync::atomic::Ordering::Relaxed)
+}
+
 impl Bar {
-    /// A bar when stderr is a terminal, else None.
+    /// A bar when stderr is a terminal and the run is not `--quiet`, else None.
     pub fn for_stderr() -> Option<Self> {
-        if !std::io::stderr().is_terminal() {
+        if quiet() || !std::io::stderr().is_terminal() {
             return None;
         }
         let bar = ProgressBar::new(0);

@@ -1417,3 +1417,27 @@ fn ke_as_radiance_multiplies_the_emission_by_pi() {
         &["--ke radiance", "no materials"],
     );
 }
+
+/// `-q` silences the adaptive step lines on stderr; the report is the same.
+#[test]
+fn quiet_silences_the_step_lines() {
+    let args = ["solve", "room", "-l", "0", "--target-error", "1e-2"];
+    let loud = radcol_ok(&args);
+    let mut q = args.to_vec();
+    q.push("-q");
+    let quiet = radcol_ok(&q);
+    assert!(String::from_utf8_lossy(&loud.stderr).contains("step"));
+    assert!(
+        quiet.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&quiet.stderr)
+    );
+    let strip = |o: &std::process::Output| {
+        String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .filter(|l| !l.contains("timings") && !l.contains("memory") && !l.contains(" s,"))
+            .map(String::from)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(strip(&loud).len(), strip(&quiet).len());
+}

@@ -68,7 +68,7 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
                 s.backend.as_ref(),
                 |step| match &bar {
                     Some(b) => b.note(&AdaptLine(step).to_string()),
-                    None if !s.json => eprintln!("{}", AdaptLine(step)),
+                    None if !s.json && !progress::quiet() => eprintln!("{}", AdaptLine(step)),
                     None => {}
                 },
             )
