@@ -26,6 +26,8 @@ enum Marker {
     Circle,
     Square,
     Triangle,
+    /// No marker (reference slopes).
+    None,
 }
 
 const SERIES: [Series; 3] = [
@@ -120,6 +122,7 @@ fn marker(svg: &mut String, m: Marker, x: f64, y: f64, color: &str) {
             x + 5.0,
             y + 4.0
         ),
+        Marker::None => Ok(()),
     };
 }
 
@@ -326,8 +329,12 @@ fn document(title: &str, left: (&[Line], &str), right: (&[Line], &str)) -> Strin
     svg
 }
 
-/// The SVG document for `rows`, titled `title`.
-pub fn study_svg(rows: &[StudyRow], title: &str) -> String {
+/// The SVG document for `rows`, titled `title`, with a dashed reference
+/// line O(h^p) in the h panel for each (series name, p) of `orders` (the
+/// theory's orders), through that series' finest error above the row's
+/// rounding floor (errors at rounding would pin it to noise; with none above
+/// it, no line).
+pub fn study_svg(rows: &[StudyRow], title: &str, orders: &[(&str, usize)]) -> String {
     let lines = |x_of: fn(&StudyRow) -> f64| -> Vec<Line> {
         SERIES
             .iter()
@@ -340,9 +347,29 @@ pub fn study_svg(rows: &[StudyRow], title: &str) -> String {
             })
             .collect()
     };
+    let mut by_h = lines(|r| r.h);
+    for &(name, p) in orders {
+        let Some(s) = SERIES.iter().find(|s| s.name == name) else {
+            continue;
+        };
+        let Some(anchor) = rows.iter().rev().find(|r| (s.value)(r) > r.rounding_floor) else {
+            continue;
+        };
+        let (h0, e0) = (anchor.h, (s.value)(anchor));
+        by_h.push(Line {
+            name: format!("O(h^{p})"),
+            color: s.color,
+            marker: Marker::None,
+            dashed: true,
+            points: rows
+                .iter()
+                .map(|r| (r.h, e0 * (r.h / h0).powi(p as i32)))
+                .collect(),
+        });
+    }
     document(
         title,
-        (&lines(|r| r.h), "mesh size h"),
+        (&by_h, "mesh size h"),
         (&lines(|r| r.total_s), "total time per level (s)"),
     )
 }
@@ -444,11 +471,30 @@ mod tests {
     #[test]
     fn svg_has_both_panels_three_series_and_a_legend() {
         let rows = vec![row(0, 1.0, 1e-2), row(1, 0.5, 1e-3), row(2, 0.25, 1e-4)];
-        let svg = study_svg(&rows, "sphere <r = 1>");
+        let svg = study_svg(&rows, "sphere <r = 1>", &[]);
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
         assert_eq!(svg.matches("<polyline").count(), 6);
         assert!(svg.contains("nodes max") && svg.contains("global max") && svg.contains(">L2<"));
         assert!(svg.contains("sphere &lt;r = 1&gt;"));
+    }
+
+    /// A reference O(h^2) through the finest global max error: its first
+    /// point lies 2 decades above it when h is 10 times larger.
+    #[test]
+    fn reference_slopes_pass_through_the_finest_error() {
+        let rows = vec![row(0, 1.0, 1e-2), row(1, 0.1, 1e-4)];
+        let svg = study_svg(&rows, "t", &[("global max", 2), ("no such series", 9)]);
+        assert_eq!(svg.matches("<polyline").count(), 7, "one reference line");
+        assert!(svg.contains("O(h^2)") && !svg.contains("O(h^9)"));
+        assert!(svg.contains(r#"stroke-dasharray="7 4""#));
+        // Its points coincide with the data's here (slope exactly 2): the
+        // reference polyline repeats the global max polyline's coordinates.
+        let polys: Vec<&str> = svg
+            .lines()
+            .filter(|l| l.starts_with("<polyline"))
+            .map(|l| l.split('"').nth(1).unwrap())
+            .collect();
+        assert_eq!(polys[1], polys[3], "global max and its O(h^2) reference");
     }
 
     #[test]

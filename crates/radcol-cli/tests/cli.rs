@@ -280,6 +280,11 @@ fn study_json_has_rows_with_eoc_and_fitted_orders() {
     let text = std::fs::read_to_string(&svg).expect("plot written");
     assert!(text.starts_with("<svg") && text.trim_end().ends_with("</svg>"));
     assert!(text.contains("nodes max") && text.contains("global max"));
+    // The theory's reference slopes: O(h^2) for global max and L2 at r = 1,
+    // and the nodes' O(h^4) at α0 (this run's auto α), anchored at level 0,
+    // the one nodal error above rounding.
+    assert_eq!(text.matches(">O(h^2)<").count(), 2, "reference slopes");
+    assert_eq!(text.matches(">O(h^4)<").count(), 1);
     assert_one_line_error(
         &[
             "study",

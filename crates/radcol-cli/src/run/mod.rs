@@ -110,7 +110,12 @@ fn run_study(job: StudyJob, w: &mut dyn Write) -> Result<()> {
     let (header, rows) = uniform_study(&s, &job.levels, w)?;
     let theory = predicted_orders(s.cfg.degree, s.alpha.value, &s.alpha.a0);
     let plot_path = match &job.plot {
-        Some(file) => Some(write_svg(file, &plot::study_svg(&rows, &header.title()))?),
+        Some(file) => {
+            let mut orders = vec![("global max", theory.global_max), ("L2", theory.l2)];
+            orders.extend(theory.nodes_max.map(|p| ("nodes max", p)));
+            let svg = plot::study_svg(&rows, &header.title(), &orders);
+            Some(write_svg(file, &svg)?)
+        }
         None => None,
     };
     let footer = StudyFooter::new(&rows, theory, plot_path);
