@@ -2,7 +2,7 @@
 
 use super::inputs::{check_quadrature, discretize, fields};
 use super::relight::Relighter;
-use super::size::{available_memory, MemoryEstimate, MemoryUse};
+use super::size::{available_memory, check_rows_stored, MemoryEstimate, MemoryUse};
 use super::{ChannelResult, SolveConfig, SolveOutcome, Timings};
 use crate::assembly::QuadratureOptions;
 use crate::assembly::{Assembled, AssemblyBackend, AssemblyPlan, Unchanged};
@@ -29,14 +29,6 @@ pub(crate) struct Plans {
     /// The check rows, when they were kept for the next step.
     check_matrix: Option<DenseMatrix>,
 }
-
-/// The adaptive loop keeps a step's check rows (f_c·n × N, twice the
-/// geometric matrix at r = 1) for the next step only while the old and new
-/// ones together take at most this fraction of the memory available:
-/// where they fit, the estimate integrates only the pairs that changed
-/// (it is otherwise most of a step: on the Cornell box at 7 710 unknowns
-/// 11.8 s of 17 s), and where they do not, nothing is lost but that time.
-const CHECK_STORE_FRACTION: f64 = 0.25;
 
 /// What a solve on a refined mesh takes from the solve of the mesh it was
 /// refined from: plans and geometric matrix, for the pairs of `unchanged`
@@ -133,8 +125,7 @@ fn estimate_channels(
         })
         .collect();
     let bytes = 8.0 * plan.rows().len() as f64 * plan.dim() as f64;
-    let store = keep_check
-        && available_memory().is_none_or(|a| 2.0 * bytes <= CHECK_STORE_FRACTION * a as f64);
+    let store = keep_check && check_rows_stored(bytes);
     let (estimates, kept) = if store {
         let prev = previous.and_then(|p| p.plans.check_matrix.as_ref());
         let (m, _) = check_matrix(&plan, prev);

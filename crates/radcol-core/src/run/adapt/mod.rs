@@ -21,7 +21,7 @@ mod history;
 pub use history::{singular_points, SingularPoint, STALL_RATIO};
 
 use super::pipeline::{solve_step, Plans, Previous};
-use super::size::available_memory;
+use super::size::{available_memory, check_rows_stored};
 use super::{discretize, SolveConfig, SolveOutcome};
 use crate::assembly::{AssemblyBackend, Unchanged};
 use crate::error::{Error, InputError};
@@ -385,8 +385,9 @@ fn mark(indicator: &[f64], threshold: f64, frozen: &dyn Fn(usize) -> bool) -> Ve
 /// and plans are still held (they count as used in the memory available when
 /// the step is planned), and the step's matrix, its linear solver's working
 /// memory (an LU factorisation: one more matrix) or its estimate's check rows
-/// (f_c of them per element against N columns: twice the matrix at r = 1),
-/// the larger, come on top. Those may take at most this fraction of the
+/// (f_c of them per element against N columns: twice the matrix at r = 1,
+/// held only where they are kept for the next step), the larger, come on
+/// top. Those may take at most this fraction of the
 /// memory available. Counting the matrix alone (at 0.6) let the Cornell box
 /// to 1e-4 plan a step of 10.2 GiB whose check rows needed 22.8 GiB more,
 /// which the step's own peak check then refused; such a refusal now also ends
@@ -412,9 +413,15 @@ fn budget(
     } else {
         0.0
     };
-    let copies = 1.0 + f64::max(solver, check);
     let fits_memory = |n: u64| {
-        let bytes = copies * 8.0 * (n as f64).powi(2);
+        let matrix = 8.0 * (n as f64).powi(2);
+        // Check rows held only where they are kept for the next step.
+        let check = if check_rows_stored(check * matrix) {
+            check
+        } else {
+            0.0
+        };
+        let bytes = (1.0 + f64::max(solver, check)) * matrix;
         !cfg.check_memory || available.is_none_or(|a| bytes <= STEP_MEMORY_FRACTION * a as f64)
     };
     let unknowns = |split: usize| ((elements + 3 * split) * f) as u64;
