@@ -136,6 +136,11 @@ impl SolveReport {
         let p = &out.plan;
         let t = &out.timings;
         let scene = s.loaded.scene();
+        let grading = s
+            .cfg
+            .grade
+            .as_ref()
+            .map(|g| GradeReport::new(g, &s.problem.surface));
         Self {
             command: "solve",
             scene: s.scene.clone(),
@@ -144,11 +149,8 @@ impl SolveReport {
             alpha_auto: s.alpha.auto,
             level: s.cfg.level,
             max_edge: s.cfg.max_edge,
-            grading: s
-                .cfg
-                .grade
-                .as_ref()
-                .map(|g| GradeReport::new(g, &s.problem.surface)),
+            warnings: warnings(s, out, grading.as_ref()),
+            grading,
             elements: disc.mesh().len(),
             unknowns: disc.len(),
             h: out.h,
@@ -211,7 +213,6 @@ impl SolveReport {
             out: written.to_vec(),
             adaptive: None,
             relit: Vec::new(),
-            warnings: warnings(s, out),
             contents: scene.map(|sc| SceneSummary {
                 triangles: sc.triangle_count(),
                 materials: sc.materials.len(),
@@ -361,11 +362,9 @@ fn fmt_estimate(f: &mut fmt::Formatter<'_>, e: &ErrorEstimate, eff: Option<f64>)
 
 /// The trust warnings of `out`, and --grade's when it found nothing to grade
 /// towards.
-fn warnings(s: &Setup, out: &SolveOutcome) -> Vec<String> {
+fn warnings(s: &Setup, out: &SolveOutcome, grading: Option<&GradeReport>) -> Vec<String> {
     let mut w = super::trust::solve_warnings(s, out);
-    if let Some(g) = &s.cfg.grade {
-        w.extend(GradeReport::new(g, &s.problem.surface).warning());
-    }
+    w.extend(grading.and_then(GradeReport::warning));
     w
 }
 
