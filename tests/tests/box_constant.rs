@@ -34,13 +34,17 @@ fn box_room_reproduces_the_constant_solution() {
             ..Default::default()
         };
         let out = solve(&problem, &cfg, &CpuBackend).unwrap();
-        for i in 0..out.matrix.nrows() {
-            let row_sum: f64 = out.matrix.row(i).iter().sum();
+        for i in 0..out.operator.dense().expect("dense").nrows() {
+            let row_sum: f64 = out.operator.dense().expect("dense").row(i).iter().sum();
             assert_close(&format!("r={r} row sum"), i, row_sum, 1.0, 2e-13);
         }
         for (i, &u) in out.channels[0].solution.nodal().iter().enumerate() {
             assert_close(&format!("r={r} u"), i, u, exact, 1e-11 * exact);
         }
-        println!("r = {r}: {} unknowns, {:?}", out.matrix.nrows(), out.plan);
+        println!(
+            "r = {r}: {} unknowns, {:?}",
+            out.operator.dense().expect("dense").nrows(),
+            out.plan
+        );
     }
 }

@@ -197,13 +197,13 @@ fn l_shaped_room_is_closed_and_occludes() {
         "the re-entrant edge must cast shadows"
     );
     let mut worst = 0.0f64;
-    for i in 0..out.matrix.nrows() {
-        let sum: f64 = out.matrix.row(i).iter().sum();
+    for i in 0..out.operator.dense().expect("dense").nrows() {
+        let sum: f64 = out.operator.dense().expect("dense").row(i).iter().sum();
         worst = worst.max((sum - 1.0).abs());
     }
     println!(
         "lroom level 0: {} unknowns, max |row sum - 1| = {worst:.2e}",
-        out.matrix.nrows()
+        out.operator.dense().expect("dense").nrows()
     );
     assert!(worst < 1e-11, "max |row sum - 1| = {worst:.3e}");
 }

@@ -48,8 +48,8 @@ fn ellipsoid_rows_sum_to_one_however_flat() {
             ..Default::default()
         };
         let out = solve(&problem, &cfg, &CpuBackend).unwrap();
-        for i in 0..out.matrix.nrows() {
-            let row_sum: f64 = out.matrix.row(i).iter().sum();
+        for i in 0..out.operator.dense().expect("dense").nrows() {
+            let row_sum: f64 = out.operator.dense().expect("dense").row(i).iter().sum();
             radcol_tests::assert_close(&format!("{axes:?} r={r} row sum"), i, row_sum, 1.0, 1e-11);
         }
     }

@@ -18,6 +18,7 @@ mod gpu_select;
 mod gpu_solve;
 mod hmatrix;
 mod house;
+mod operator;
 mod relight;
 mod reuse;
 mod scenes;

@@ -79,8 +79,8 @@ fn closed_room_with_a_cube_has_unit_row_sums_and_the_constant_solution() {
         let out = run(&scene, &cfg(r, level), &CpuBackend);
         assert!(out.plan.pairs_partial > 0, "the cube must cast shadows");
         let mut worst = 0.0f64;
-        for i in 0..out.matrix.nrows() {
-            let row_sum: f64 = out.matrix.row(i).iter().sum();
+        for i in 0..out.operator.dense().expect("dense").nrows() {
+            let row_sum: f64 = out.operator.dense().expect("dense").row(i).iter().sum();
             worst = worst.max((row_sum - 1.0).abs());
             assert_close(&format!("r={r} row sum"), i, row_sum, 1.0, 1e-11);
         }
@@ -92,7 +92,7 @@ fn closed_room_with_a_cube_has_unit_row_sums_and_the_constant_solution() {
         }
         println!(
             "r = {r}, level {level}: {} unknowns, max |row sum - 1| = {worst:.2e}, {:?}",
-            out.matrix.nrows(),
+            out.operator.dense().expect("dense").nrows(),
             out.plan
         );
     }
@@ -116,7 +116,7 @@ fn closed_room_with_a_cube_balances_energy() {
             // 1/π); a fraction 1 - ρ of it is absorbed.
             let u = ch.solution.nodal();
             let mut h = vec![0.0; u.len()];
-            out.matrix.matvec(u, &mut h);
+            out.operator.dense().expect("dense").matvec(u, &mut h);
             let absorbed: Vec<f64> = h.iter().zip(&ch.rho).map(|(h, r)| (1.0 - r) * h).collect();
             let absorbed = radcol_core::solution::integrate_nodal(&out.discretization, &absorbed);
             let imbalance = (absorbed - ch.integral_e).abs() / ch.integral_e;
@@ -178,8 +178,17 @@ fn clipping_is_exact_where_rays_are_not() {
     let mut rays = cfg(1, 1);
     rays.quad.visibility = VisibilityMode::Rays;
     let row_error = |out: &SolveOutcome| {
-        (0..out.matrix.nrows())
-            .map(|i| (out.matrix.row(i).iter().sum::<f64>() - 1.0).abs())
+        (0..out.operator.dense().expect("dense").nrows())
+            .map(|i| {
+                (out.operator
+                    .dense()
+                    .expect("dense")
+                    .row(i)
+                    .iter()
+                    .sum::<f64>()
+                    - 1.0)
+                    .abs()
+            })
             .fold(0.0, f64::max)
     };
     let clip_rows = row_error(&run(&room, &cfg(1, 1), &CpuBackend));

@@ -71,6 +71,17 @@ pub enum SolverArg {
     Lu,
 }
 
+/// Which geometric operator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum OperatorArg {
+    /// Dense when the matrix fits in memory or the solver is LU, else compressed.
+    Auto,
+    /// The dense N×N matrix (8 N² bytes).
+    Dense,
+    /// A hierarchical matrix (GMRES only).
+    Compressed,
+}
+
 /// Which assembly backend.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum BackendArg {
@@ -167,6 +178,18 @@ pub struct ProblemArgs {
     /// Linear solver.
     #[arg(long, value_enum, default_value_t = SolverArg::Gmres)]
     pub solver: SolverArg,
+
+    /// The geometric operator: the dense N×N matrix, or a hierarchical matrix whose
+    /// well-separated blocks are low-rank (adaptive cross approximation to
+    /// --compression-tol), fully shadowed blocks zero. `auto`: dense when it fits in memory
+    /// (or with --solver lu), else compressed.
+    #[arg(long, value_enum, default_value_t = OperatorArg::Auto)]
+    pub operator: OperatorArg,
+
+    /// Relative tolerance of each compressed block (Frobenius), in (0, 1); the solution's
+    /// error from compression is of this order.
+    #[arg(long, value_name = "T", default_value = "1e-8")]
+    pub compression_tol: f64,
 
     /// GMRES relative residual tolerance, in (0, 1).
     #[arg(long, value_name = "T", default_value = "1e-12")]

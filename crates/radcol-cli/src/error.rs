@@ -44,9 +44,20 @@ pub fn exit_code(err: &anyhow::Error) -> u8 {
 /// library's messages speak of meshes and degrees, the CLI's of flags.
 pub fn with_flags(err: CoreError) -> anyhow::Error {
     match &err {
-        CoreError::Input(e @ InputError::TooLarge { .. }) => {
-            bad_input(format!("{e} (flags: --level, --max-edge, --degree)")).into()
+        CoreError::Input(e @ InputError::TooLarge { .. }) => bad_input(format!(
+            "{e} (flags: --level, --max-edge, --degree, --operator compressed with --solver gmres)"
+        ))
+        .into(),
+        CoreError::Input(
+            e @ (InputError::CompressedTooLarge { .. } | InputError::PairTableTooLarge { .. }),
+        ) => bad_input(format!(
+            "{e} (flags: --level, --max-edge, --degree, --compression-tol, --no-estimate)"
+        ))
+        .into(),
+        CoreError::Input(e @ InputError::CompressionTolerance { .. }) => {
+            bad_input(format!("--compression-tol: {e}")).into()
         }
+        CoreError::Input(e @ InputError::CompressedLu) => bad_input(e.to_string()).into(),
         CoreError::Input(e @ InputError::PeakTooLarge { .. }) => bad_input(format!(
             "{e} (flags: --level, --max-edge, --degree, --no-estimate, --solver gmres)"
         ))

@@ -190,6 +190,8 @@ pub fn setup(
         level,
         solver: p.solver,
         gmres: p.gmres.clone(),
+        operator: p.operator.0,
+        compression: p.operator.1,
         quad: p.quad.clone(),
         check_memory: true,
         max_edge,

@@ -393,6 +393,64 @@ fn magnitude_cases() -> Vec<Case> {
 fn flag_cases() -> Vec<Case> {
     vec![
         case(
+            "--compression-tol 0",
+            &[
+                "solve",
+                "sphere",
+                "--operator",
+                "compressed",
+                "--compression-tol",
+                "0",
+            ],
+            Refused(2, &["--compression-tol", "(0, 1)"]),
+        ),
+        case(
+            "--compression-tol nan",
+            &["solve", "sphere", "--compression-tol", "nan"],
+            Refused(2, &["--compression-tol", "nan"]),
+        ),
+        case(
+            "--compression-tol 1",
+            &["solve", "sphere", "--compression-tol", "1"],
+            Refused(2, &["--compression-tol", "(0, 1)"]),
+        ),
+        case(
+            "--operator compressed --solver lu",
+            &[
+                "solve",
+                "sphere",
+                "--operator",
+                "compressed",
+                "--solver",
+                "lu",
+            ],
+            Refused(2, &["--solver gmres", "--operator dense"]),
+        ),
+        case(
+            "--operator sparse",
+            &["solve", "sphere", "--operator", "sparse"],
+            Refused(2, &["--operator", "sparse"]),
+        ),
+        case(
+            "compressed sphere: u = E / (1 - rho) = 2",
+            &[
+                "solve",
+                "sphere",
+                "--level",
+                "2",
+                "--operator",
+                "compressed",
+                "--compression-tol",
+                "1e-6",
+            ],
+            Answer("/channels/0/integral_u", 8.0 * PI, 1e-5),
+        ),
+        case(
+            "compressed: the report says so",
+            &["solve", "sphere", "--operator", "compressed"],
+            Says(&["operator    compressed", "low-rank blocks"]),
+        ),
+        case(
             "--quad-tol 1e-300",
             &["solve", "sphere", "--quad-tol", "1e-300"],
             Refused(2, &["--quad-tol", "1e-15"]),

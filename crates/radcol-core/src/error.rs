@@ -134,6 +134,38 @@ pub enum InputError {
         /// The target asked for.
         value: f64,
     },
+    /// A compression tolerance outside (0, 1).
+    #[error("compression tolerance {value} must lie in (0, 1): it is the relative error of each compressed block (Frobenius)")]
+    CompressionTolerance {
+        /// The tolerance asked for.
+        value: f64,
+    },
+    /// LU asked for with a compressed operator.
+    #[error("LU factors the dense matrix, and the compressed operator does not store one: use --solver gmres with --operator compressed, or --operator dense")]
+    CompressedLu,
+    /// The compressed operator, once built, leaves too little memory for
+    /// the rest of the solve.
+    #[error("the compressed operator takes {} ({:.3} of the dense matrix) and the rest of the solve would need {} more, but {} is available; use a coarser mesh or a lower degree, a larger compression tolerance, or skip the estimate", gib(*stored), fraction, gib(*to_come), gib(*available as f64))]
+    CompressedTooLarge {
+        /// Bytes of the built operator.
+        stored: f64,
+        /// Its stored numbers over the dense matrix's.
+        fraction: f64,
+        /// Bytes still to come (solver or estimate).
+        to_come: f64,
+        /// Bytes available.
+        available: u64,
+    },
+    /// The plan's table of element pair classes would not fit in memory.
+    #[error("{} need a table of their element pairs' classes of {} (one byte per pair, kept by the assembly plan for the compressed operator too), but only {} of memory is available; use a coarser mesh", elements_text(*elements), gib(*bytes), gib(*available as f64))]
+    PairTableTooLarge {
+        /// Elements n.
+        elements: u64,
+        /// n² bytes.
+        bytes: f64,
+        /// Bytes available.
+        available: u64,
+    },
     /// A curved surface that may occlude itself: radcol clips flat elements only.
     #[error("surface '{surface}': patch '{patch}' is curved and the surface is not known to bound a convex set; radcol models occlusion between flat triangles only (set Surface::convex_enclosure when the surface does bound a convex set)")]
     CurvedOcclusion {
@@ -164,6 +196,29 @@ fn gib(bytes: f64) -> String {
         format!("{g:.2} GiB")
     } else {
         format!("{g:.3e} GiB")
+    }
+}
+
+impl InputError {
+    /// A refusal for the peak memory of a solve whose operator was (or
+    /// would be) admitted: the dense peak, the compressed operator's rest,
+    /// or the compressed operator's pair table.
+    pub fn is_peak_refusal(&self) -> bool {
+        matches!(
+            self,
+            Self::PeakTooLarge { .. }
+                | Self::CompressedTooLarge { .. }
+                | Self::PairTableTooLarge { .. }
+        )
+    }
+}
+
+/// n elements; `u64::MAX` is where counting stopped.
+fn elements_text(elements: u64) -> String {
+    if elements == u64::MAX {
+        "more than 4 million elements (counting stopped there)".into()
+    } else {
+        format!("{elements} elements")
     }
 }
 

@@ -6,6 +6,7 @@ mod adapt;
 mod compare;
 mod info;
 mod nodes;
+mod operator;
 mod solve;
 mod study;
 mod trust;

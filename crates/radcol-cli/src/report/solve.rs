@@ -1,6 +1,7 @@
 //! `radcol solve`: mesh, problem, visibility, backend, assembly, timings and
 //! per-channel results.
 
+use super::operator::{self, OperatorReport};
 use super::{alpha_text, precise, sci, secs, AdaptReport, ProblemText};
 use crate::setup::Setup;
 use radcol_core::assembly::{BackendInfo, VisibilityMode};
@@ -113,6 +114,7 @@ pub struct SolveReport {
     /// Predicted and measured memory (the peak measured when the report is
     /// made, outputs written).
     memory: radcol_core::run::MemoryUse,
+    operator: OperatorReport,
     assembly: AssemblyWork,
     visibility: VisibilityAnalysis,
     materials: Option<Vec<MaterialShort>>,
@@ -210,6 +212,7 @@ impl SolveReport {
                 })
                 .collect(),
             memory: out.memory.measured(),
+            operator: OperatorReport::new(out),
             out: written.to_vec(),
             adaptive: None,
             relit: Vec::new(),
@@ -453,6 +456,7 @@ impl fmt::Display for SolveReport {
         writeln!(f, "  visibility  {}", self.visibility.reason)?;
         writeln!(f, "  backend     {}", self.backend)?;
         self.fmt_assembly(f)?;
+        write!(f, "{}", self.operator)?;
         let t = &self.timings;
         writeln!(
             f,
@@ -465,20 +469,7 @@ impl fmt::Display for SolveReport {
             secs(t.estimate_s),
             secs(t.total_s)
         )?;
-        let m = &self.memory;
-        if let Some(peak) = m.measured_peak_bytes {
-            let gb = |b: f64| format!("{:.3} GB", b / 1e9);
-            writeln!(
-                f,
-                "  memory      peak {} measured, {} predicted after planning (resident {} + matrix {} + max(solver {}, estimate {}))",
-                gb(peak),
-                gb(m.predicted_peak_bytes),
-                gb(m.after_plan_bytes),
-                gb(m.matrix_bytes),
-                gb(m.solver_bytes),
-                gb(m.estimate_bytes)
-            )?;
-        }
+        operator::fmt_memory(f, &self.memory)?;
         if let Some(a) = &self.adaptive {
             write!(f, "{a}")?;
         }

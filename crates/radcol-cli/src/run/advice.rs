@@ -27,6 +27,11 @@ pub fn sized(err: CoreError, s: &Setup) -> anyhow::Error {
             available,
             ..
         }) => (matrix / 8.0).sqrt() * (0.9 * *available as f64 / to_come).sqrt(),
+        // The compressed operator's a priori limit: n² bytes of pair classes.
+        CoreError::Input(InputError::PairTableTooLarge { available, .. }) => {
+            let per_element = radcol_core::nodes::nodes_per_element(s.cfg.degree) as f64;
+            (0.9 * *available as f64).sqrt() * per_element
+        }
         _ => return with_flags(err),
     };
     let fit = fit.floor() as u64;

@@ -8,19 +8,20 @@ mod outputs;
 pub use outputs::{LookSpec, Output, OutputFile, OutputKind};
 
 use crate::args::{
-    BackendArg, Cli, Command, InfoArgs, NodesArgs, PrecisionArg, ProblemArgs, SolveArgs, SolverArg,
-    StudyArgs, VisibilityArg,
+    BackendArg, Cli, Command, InfoArgs, NodesArgs, OperatorArg, PrecisionArg, ProblemArgs,
+    SolveArgs, SolverArg, StudyArgs, VisibilityArg,
 };
 use crate::error::{bad_input, BadInput};
 use crate::scene::SceneSpec;
 use anyhow::{Context, Result};
 use outputs::{error_map, look, output, svg_file};
 use radcol_core::assembly::{QuadratureOptions, VisibilityMode, MIN_QUAD_TOL};
+use radcol_core::hmatrix::HOptions;
 use radcol_core::mesh::grading::Grade;
 use radcol_core::nodes::{check_alpha, check_degree};
 use radcol_core::problem::Field;
 use radcol_core::run::adapt::AdaptOptions;
-use radcol_core::run::SolverKind;
+use radcol_core::run::{OperatorChoice, SolveConfig, SolverKind};
 use radcol_core::solve::GmresParams;
 use radcol_gpu::{BackendChoice, Precision};
 use std::ops::RangeInclusive;
@@ -68,6 +69,8 @@ pub struct ProblemSpec {
     pub solver: SolverKind,
     /// GMRES settings.
     pub gmres: GmresParams,
+    /// Dense or compressed operator, and the compression's settings.
+    pub operator: (OperatorChoice, HOptions),
     /// Quadrature accuracy and visibility mode.
     pub quad: QuadratureOptions,
     /// Which backend.
@@ -371,6 +374,17 @@ fn problem(p: &ProblemArgs) -> Result<ProblemSpec> {
             SolverArg::Gmres => SolverKind::Gmres,
             SolverArg::Lu => SolverKind::Lu,
         },
+        operator: (
+            match p.operator {
+                OperatorArg::Auto => OperatorChoice::Auto,
+                OperatorArg::Dense => OperatorChoice::Dense,
+                OperatorArg::Compressed => OperatorChoice::Compressed,
+            },
+            HOptions {
+                tol: p.compression_tol,
+                ..SolveConfig::default().compression
+            },
+        ),
         gmres: GmresParams {
             rel_tol: tol,
             restart: p.restart,
@@ -460,34 +474,4 @@ fn parse_range(flag: &str, text: &str, what: &str) -> Result<RangeInclusive<u32>
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn levels_accept_both_range_forms() {
-        assert_eq!(parse_levels("0..3").unwrap(), 0..=3);
-        assert_eq!(parse_levels(" 1..=2 ").unwrap(), 1..=2);
-        assert_eq!(parse_levels("2..2").unwrap(), 2..=2);
-    }
-
-    #[test]
-    fn levels_reject_bad_ranges() {
-        assert!(parse_levels("3..1").unwrap_err().0.contains("greater"));
-        assert!(parse_levels("a..2")
-            .unwrap_err()
-            .0
-            .contains("'a' is not a level"));
-        assert!(parse_levels("2").unwrap_err().0.contains("expected A..B"));
-        assert!(parse_levels("-1..2").is_err());
-    }
-
-    #[test]
-    fn alpha_is_auto_or_inside_the_open_interval() {
-        assert_eq!(parse_alpha("auto").unwrap(), AlphaSpec::Auto);
-        assert_eq!(parse_alpha("0.1").unwrap(), AlphaSpec::Value(0.1));
-        assert!(parse_alpha("0.4").is_err());
-        assert!(parse_alpha("0").is_err());
-        assert!(parse_alpha("nan").is_err());
-        assert!(parse_alpha("x").is_err());
-    }
-}
+mod tests;

@@ -183,6 +183,38 @@ impl HMatrix {
             + (self.leaves.len() * std::mem::size_of::<Leaf>()) as u64
     }
 
+    /// The relative error of y = A x over `rows` sample rows, for a fixed
+    /// pseudo-random x in [0, 1): ‖ŷ − y‖ / ‖y‖ over those rows, with y
+    /// from the exact rows of `entries`. An a posteriori check of the
+    /// compression, at the cost of `rows` rows of the dense matrix.
+    pub fn sampled_error(&self, entries: &dyn Entries, rows: usize) -> f64 {
+        let (m, n) = self.stats.shape;
+        let golden = |k: usize| ((k as f64 + 1.0) * 0.618_033_988_749_895).fract();
+        let x: Vec<f64> = (0..n).map(golden).collect();
+        let mut y = vec![0.0; m];
+        self.matvec(&x, &mut y);
+        let cols: Vec<usize> = (0..n).collect();
+        let mut picked: Vec<usize> = (0..rows.min(m))
+            .map(|k| ((golden(k) * m as f64) as usize).min(m - 1))
+            .collect();
+        picked.sort_unstable();
+        picked.dedup();
+        let (num, den) = picked
+            .par_iter()
+            .map(|&i| {
+                let mut row = vec![0.0; n];
+                entries.block(&[i], &cols, &mut row);
+                let exact: f64 = row.iter().zip(&x).map(|(a, b)| a * b).sum();
+                ((y[i] - exact).powi(2), exact * exact)
+            })
+            .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+        if den > 0.0 {
+            (num / den).sqrt()
+        } else {
+            num.sqrt()
+        }
+    }
+
     /// y = A x (original indices), leaves in parallel.
     pub fn matvec(&self, x: &[f64], y: &mut [f64]) {
         let (m, n) = self.stats.shape;

@@ -1,16 +1,23 @@
 //! What one solve is asked to do: degree, α, refinement, solver, quadrature.
 
+use super::operator::OperatorChoice;
 use crate::assembly::QuadratureOptions;
+use crate::hmatrix::HOptions;
 use crate::mesh::grading::Grade;
 use crate::progress::ProgressHandle;
 use crate::solve::GmresParams;
 use serde::Serialize;
 
+/// The compressed operator's default relative tolerance per block: below
+/// the discretization errors radcol reaches in practice (1e-3 … 1e-6), so
+/// that compression does not show in them.
+pub const DEFAULT_COMPRESSION_TOL: f64 = 1e-8;
+
 /// Which linear solver.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum SolverKind {
-    /// Restarted GMRES on the dense operator.
+    /// Restarted GMRES on the dense or compressed operator.
     Gmres,
     /// Dense LU (faer), one factorisation per distinct ρ.
     Lu,
@@ -31,7 +38,7 @@ pub struct SolveConfig {
     pub gmres: GmresParams,
     /// Quadrature accuracy.
     pub quad: QuadratureOptions,
-    /// Refuse problems whose dense matrix would not fit in memory.
+    /// Refuse problems whose operator (dense, or a compressed one's pair table) would not fit in memory.
     pub check_memory: bool,
     /// After the uniform `level`, refine elements 4:1 until every mapped edge
     /// is at most this long (scene units); None: uniform refinement only.
@@ -46,6 +53,11 @@ pub struct SolveConfig {
     /// [`crate::solution::Solution::limited_nonnegative`] for display
     /// ([`super::ChannelResult::shown`]).
     pub limit_negative: bool,
+    /// Dense or compressed geometric operator ([`super::operator::decide`]).
+    pub operator: OperatorChoice,
+    /// How a compressed operator is built: its relative tolerance per
+    /// block, admissibility and leaf size.
+    pub compression: HOptions,
     /// Progress observer (assembly row blocks, channels solved), if any.
     pub progress: Option<ProgressHandle>,
 }
@@ -64,6 +76,11 @@ impl Default for SolveConfig {
             grade: None,
             estimate: true,
             limit_negative: true,
+            operator: OperatorChoice::Auto,
+            compression: HOptions {
+                tol: DEFAULT_COMPRESSION_TOL,
+                ..HOptions::default()
+            },
             progress: None,
         }
     }

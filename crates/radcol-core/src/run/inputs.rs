@@ -2,7 +2,8 @@
 //! extent and quadrature tolerance before anything is built, then ρ, E and
 //! the exact solution at the nodes.
 
-use super::size::{mesh_size, MemoryEstimate};
+use super::operator::decide_now;
+use super::size::mesh_size;
 use super::SolveConfig;
 use crate::assembly::MIN_QUAD_TOL;
 use crate::discretization::Discretization;
@@ -15,7 +16,8 @@ use rayon::prelude::*;
 use std::sync::Arc;
 
 /// Checks, before anything is built, that the mesh `cfg` asks for on
-/// `problem`'s surface is valid and its dense matrices fit in memory (when
+/// `problem`'s surface is valid and its operator (dense or compressed:
+/// [`super::operator::decide`]) can fit in memory (when
 /// `cfg.check_memory`); returns its unknowns.
 pub fn check_size(problem: &Problem, cfg: &SolveConfig) -> Result<u64, InputError> {
     if let Some(h) = cfg.max_edge {
@@ -37,18 +39,15 @@ pub fn check_size(problem: &Problem, cfg: &SolveConfig) -> Result<u64, InputErro
             }
         }
     }
-    let n = mesh_size(
+    let size = mesh_size(
         &problem.surface,
         cfg.level,
         cfg.max_edge,
         cfg.grade.as_ref(),
         cfg.degree,
-    )
-    .unknowns;
-    if cfg.check_memory {
-        MemoryEstimate::new(n).check(cfg.solver)?;
-    }
-    Ok(n)
+    );
+    decide_now(cfg, size.unknowns, size.elements)?;
+    Ok(size.unknowns)
 }
 
 /// Builds the mesh and collocation points for `cfg`, refusing sizes that do

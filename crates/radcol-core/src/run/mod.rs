@@ -15,13 +15,15 @@
 pub mod adapt;
 mod config;
 mod inputs;
+pub mod operator;
 mod outcome;
 mod pipeline;
 mod relight;
 mod size;
 
-pub use config::{SolveConfig, SolverKind};
+pub use config::{SolveConfig, SolverKind, DEFAULT_COMPRESSION_TOL};
 pub use inputs::{check_size, discretize, MAX_EXTENT, MIN_EXTENT};
+pub use operator::{GeometricOperator, OperatorChoice, OperatorDecision, OperatorKind};
 pub use outcome::{ChannelResult, SolveOutcome, SolverReport, Timings};
 pub use pipeline::{solve, solve_on_mesh, true_residual};
 pub use relight::Relighter;

@@ -5,7 +5,6 @@ use super::SolverKind;
 use crate::assembly::{BackendInfo, PlanStats};
 use crate::discretization::Discretization;
 use crate::estimate::ErrorEstimate;
-use crate::matrix::DenseMatrix;
 use crate::norms::ErrorNorms;
 use crate::solution::{Limited, Solution};
 use crate::visibility::VisibilityAnalysis;
@@ -99,8 +98,11 @@ impl ChannelResult {
 pub struct SolveOutcome {
     /// The discretization solved on.
     pub discretization: Arc<Discretization>,
-    /// The geometric matrix (kept for exports and checks).
-    pub matrix: DenseMatrix,
+    /// The geometric operator, dense or compressed (kept for relighting,
+    /// exports and checks).
+    pub operator: super::GeometricOperator,
+    /// Why it is dense or compressed.
+    pub operator_decision: super::OperatorDecision,
     /// Mesh size h (eq. 11).
     pub h: f64,
     /// Backend that assembled.

@@ -1,16 +1,18 @@
 //! The stages of one solve (see the module overview in [`super`]).
 
 use super::inputs::{check_quadrature, discretize, fields};
+use super::operator::{decide_now, GeometricOperator, OperatorDecision, OperatorKind};
 use super::relight::Relighter;
-use super::size::{available_memory, check_rows_stored, MemoryEstimate, MemoryUse};
+use super::size::{available_memory, check_rows_stored, MemoryUse};
 use super::{ChannelResult, SolveConfig, SolveOutcome, Timings};
 use crate::assembly::QuadratureOptions;
-use crate::assembly::{Assembled, AssemblyBackend, AssemblyPlan, Unchanged};
+use crate::assembly::{AssemblyBackend, AssemblyPlan, BackendInfo, CpuBackend, Unchanged};
 use crate::discretization::Discretization;
 use crate::error::Error;
 use crate::estimate::{
     check_matrix, check_nodes, estimate, estimate_from, ChannelFields, ESTIMATE_QUAD_TOL,
 };
+use crate::hmatrix::radiosity::PlanEntries;
 use crate::matrix::DenseMatrix;
 use crate::mesh::Mesh;
 use crate::nodes::NodeSet;
@@ -39,8 +41,21 @@ pub(crate) struct Previous<'a> {
     pub(crate) unchanged: Arc<Unchanged>,
 }
 
-/// Plans the assembly (with `visibility`, decided by the caller) and fills
-/// the geometric matrix on `backend`, reusing `previous`'s unchanged pairs.
+/// What the assembly stage built.
+struct Built {
+    plan: AssemblyPlan,
+    operator: GeometricOperator,
+    decision: OperatorDecision,
+    kernel_evals: u64,
+    device_seconds: Option<f64>,
+    backend: BackendInfo,
+    memory: MemoryUse,
+}
+
+/// Plans the assembly (with `visibility`, decided by the caller) and builds
+/// the geometric operator: the dense matrix on `backend`, reusing
+/// `previous`'s unchanged pairs, or the compressed one from the plan's
+/// integrators ([`super::operator::decide`]).
 fn assemble(
     disc: &Arc<Discretization>,
     cfg: &SolveConfig,
@@ -48,7 +63,9 @@ fn assemble(
     backend: &dyn AssemblyBackend,
     previous: Option<&Previous<'_>>,
     keep_check: bool,
-) -> Result<(AssemblyPlan, Assembled, MemoryUse), Error> {
+) -> Result<Built, Error> {
+    let mut decision = decide_now(cfg, disc.len() as u64, disc.mesh().len() as u64)?;
+    let compressed = decision.kind == OperatorKind::Compressed;
     let progress = cfg.progress.clone();
     let before = super::size::process_memory().map(|(rss, _)| rss);
     let plan = match previous {
@@ -68,26 +85,76 @@ fn assemble(
         (Some(b), Some((after, _))) => plan.heap_bytes().max(after.saturating_sub(b)),
         _ => plan.heap_bytes(),
     };
-    let memory = MemoryUse::predict(
-        disc.len(),
-        plan_cost,
-        cfg.solver,
-        cfg.gmres.restart,
-        cfg.estimate,
-        disc.mesh().len() * crate::nodes::nodes_per_element(disc.nodes().degree() + 1),
-        keep_check,
-    );
+    let predict = |matrix_bytes: Option<f64>| {
+        MemoryUse::predict(
+            disc.len(),
+            plan_cost,
+            cfg.solver,
+            cfg.gmres.restart,
+            cfg.estimate,
+            disc.mesh().len() * crate::nodes::nodes_per_element(disc.nodes().degree() + 1),
+            keep_check,
+        )
+        .with_matrix(matrix_bytes)
+    };
+    // The compressed operator's size is known once it is built: until then
+    // only the rest of the peak is checked. Where auto chose dense but the
+    // dense solve's whole peak does not fit, it compresses instead.
+    let mut memory = predict(compressed.then_some(0.0));
     if cfg.check_memory {
-        memory.check(available_memory())?;
+        let available = available_memory();
+        match memory.check(available) {
+            Err(e) if !compressed && decision.switchable => {
+                decision = decision.compress_instead(&e);
+                memory = predict(Some(0.0));
+                memory.check(available)?;
+            }
+            r => r?,
+        }
     }
+    let compressed = decision.kind == OperatorKind::Compressed;
     if let Some(p) = &cfg.progress {
         p.start("assembly", disc.mesh().len() as u64);
     }
-    let assembled = match previous {
-        Some(p) => backend.assemble_reusing(&plan, &p.outcome.matrix)?,
-        None => backend.assemble(&plan)?,
+    let dense_previous = previous.and_then(|p| p.outcome.operator.dense());
+    let (operator, kernel_evals, device_seconds, info) = if compressed {
+        let entries = PlanEntries::new(&plan);
+        let h = entries.build(&cfg.compression);
+        decision.sampled_error = Some(h.sampled_error(&entries, super::operator::SAMPLED_ROWS));
+        // Not predicted again: the resident set now holds the operator.
+        memory = memory.with_matrix(Some(h.heap_bytes() as f64));
+        if cfg.check_memory {
+            memory.check_compressed(&h, available_memory())?;
+        }
+        let info = CpuBackend.info();
+        (
+            GeometricOperator::Compressed(h),
+            entries.evaluations(),
+            None,
+            info,
+        )
+    } else {
+        let assembled = match dense_previous {
+            Some(m) => backend.assemble_reusing(&plan, m)?,
+            None => backend.assemble(&plan)?,
+        };
+        let a = assembled;
+        (
+            GeometricOperator::Dense(a.matrix),
+            a.kernel_evals,
+            a.device_seconds,
+            backend.info(),
+        )
     };
-    Ok((plan, assembled, memory))
+    Ok(Built {
+        plan,
+        operator,
+        decision,
+        kernel_evals,
+        device_seconds,
+        backend: info,
+        memory,
+    })
 }
 
 /// Estimates every channel's error at the check points of its mesh
@@ -192,9 +259,7 @@ pub(crate) fn solve_step(
     visibility.check_supported()?;
     let nodes = NodeSet::new(cfg.degree, cfg.alpha)?;
     let unknowns = (mesh.len() * nodes.len()) as u64;
-    if cfg.check_memory {
-        MemoryEstimate::new(unknowns).check(cfg.solver)?;
-    }
+    decide_now(cfg, unknowns, mesh.len() as u64)?;
     let disc = Arc::new(Discretization::new(mesh, nodes));
     let stages = Stages {
         problem,
@@ -232,7 +297,7 @@ impl Stages<'_> {
         let rhs_s = t.elapsed().as_secs_f64();
 
         let t = Instant::now();
-        let (plan, assembled, memory) = assemble(
+        let built = assemble(
             &disc,
             cfg,
             &visibility,
@@ -243,7 +308,7 @@ impl Stages<'_> {
         let assembly_s = t.elapsed().as_secs_f64();
 
         let t = Instant::now();
-        let mut channels = Relighter::over(disc.clone(), &assembled.matrix, cfg)
+        let mut channels = Relighter::over(disc.clone(), &built.operator, cfg)
             .solve_fields(problem, fields, self.guess)?;
         let solve_s = t.elapsed().as_secs_f64();
 
@@ -273,13 +338,14 @@ impl Stages<'_> {
 
         let outcome = SolveOutcome {
             h,
-            backend: self.backend.info(),
-            plan: plan.stats(),
-            memory: memory.measured(),
+            backend: built.backend,
+            plan: built.plan.stats(),
+            memory: built.memory.measured(),
             visibility,
-            kernel_evals: assembled.kernel_evals,
-            device_seconds: assembled.device_seconds,
-            matrix: assembled.matrix,
+            kernel_evals: built.kernel_evals,
+            device_seconds: built.device_seconds,
+            operator: built.operator,
+            operator_decision: built.decision,
             discretization: disc,
             channels,
             timings: Timings {
@@ -295,7 +361,7 @@ impl Stages<'_> {
         Ok((
             outcome,
             Plans {
-                solve: plan,
+                solve: built.plan,
                 check,
                 check_matrix,
             },
@@ -378,7 +444,18 @@ mod tests {
             assert!(msg.contains("max edge length"), "{msg}");
         }
         if super::super::available_memory().is_some() {
+            // GMRES compresses where the dense matrix does not fit; then
+            // the plan's pair table is what cannot fit.
             let err = discretize(&problem, &cfg(Some(1e-9))).unwrap_err();
+            assert!(
+                matches!(err, Error::Input(InputError::PairTableTooLarge { .. })),
+                "{err}"
+            );
+            let dense = SolveConfig {
+                operator: super::super::OperatorChoice::Dense,
+                ..cfg(Some(1e-9))
+            };
+            let err = discretize(&problem, &dense).unwrap_err();
             assert!(
                 matches!(err, Error::Input(InputError::TooLarge { .. })),
                 "{err}"

@@ -6,14 +6,14 @@
 
 use super::inputs::{fields, NodalFields};
 use super::pipeline::{limit_negative, true_residual};
+use super::GeometricOperator;
 use super::{ChannelResult, SolveConfig, SolveOutcome, SolverKind, SolverReport};
 use crate::discretization::Discretization;
 use crate::error::{Error, InputError};
-use crate::matrix::DenseMatrix;
 use crate::norms::error_norms;
 use crate::problem::Problem;
 use crate::solution::{integrate_nodal, Solution};
-use crate::solve::{gmres, DenseLu, RadiosityOperator};
+use crate::solve::{gmres, DenseLu, ImplicitRadiosity, LinearOperator, RadiosityOperator};
 use std::sync::Arc;
 
 /// An assembled operator kept to solve again: (I - diag ρ Gm) u = E for any
@@ -35,7 +35,7 @@ use std::sync::Arc;
 #[derive(Debug)]
 pub struct Relighter<'a> {
     disc: Arc<Discretization>,
-    matrix: &'a DenseMatrix,
+    operator: &'a GeometricOperator,
     cfg: SolveConfig,
     /// ρ at the nodes and its factors with their condition estimate (LU).
     lu: Option<(Vec<f64>, DenseLu, f64)>,
@@ -49,17 +49,17 @@ impl<'a> Relighter<'a> {
             progress: None,
             ..cfg.clone()
         };
-        Self::over(outcome.discretization.clone(), &outcome.matrix, &quiet)
+        Self::over(outcome.discretization.clone(), &outcome.operator, &quiet)
     }
 
     pub(crate) fn over(
         disc: Arc<Discretization>,
-        matrix: &'a DenseMatrix,
+        operator: &'a GeometricOperator,
         cfg: &SolveConfig,
     ) -> Self {
         Self {
             disc,
-            matrix,
+            operator,
             cfg: cfg.clone(),
             lu: None,
         }
@@ -109,14 +109,26 @@ impl<'a> Relighter<'a> {
             p.start("solve", problem.channels.len() as u64);
         }
         for (c, (ch, (rho, emission))) in problem.channels.iter().zip(fields).enumerate() {
-            let op = RadiosityOperator::new(self.matrix, &rho)?;
             let mut x = match guess.and_then(|g| g.get(c)) {
                 Some(g) if g.len() == emission.len() => g.clone(),
                 _ => emission.clone(),
             };
+            // The dense matrix's fused row products, or products through
+            // the compressed operator.
+            let (dense_op, implicit_op);
+            let op: &dyn LinearOperator = match self.operator.dense() {
+                Some(gm) => {
+                    dense_op = RadiosityOperator::new(gm, &rho)?;
+                    &dense_op
+                }
+                None => {
+                    implicit_op = ImplicitRadiosity::new(self.operator, &rho)?;
+                    &implicit_op
+                }
+            };
             let (iterations, growth, condition, at_rounding_floor) = match cfg.solver {
                 SolverKind::Gmres => {
-                    let info = gmres(&op, &emission, &mut x, &cfg.gmres)?;
+                    let info = gmres(op, &emission, &mut x, &cfg.gmres)?;
                     (
                         info.iterations,
                         Some(info.growth),
@@ -125,11 +137,14 @@ impl<'a> Relighter<'a> {
                     )
                 }
                 SolverKind::Lu => {
+                    let Some(gm) = self.operator.dense() else {
+                        return Err(InputError::CompressedLu.into());
+                    };
                     if lu_cache.as_ref().is_none_or(|(r, _, _)| *r != rho) {
                         // The old factors go first: a channel with other ρ
                         // (Cornell's green after red) held two copies at once.
                         drop(lu_cache.take());
-                        let lu = DenseLu::factor_radiosity(&op)?;
+                        let lu = DenseLu::factor_radiosity(&RadiosityOperator::new(gm, &rho)?)?;
                         let kappa = lu.condition_estimate();
                         *lu_cache = Some((rho.clone(), lu, kappa));
                     }
@@ -138,7 +153,7 @@ impl<'a> Relighter<'a> {
                     (0, None, Some(*kappa), false)
                 }
             };
-            let residual = true_residual(&op, &x, &emission);
+            let residual = true_residual(op, &x, &emission);
             if !residual.is_finite() {
                 return Err(crate::solve::SolveError::NonFinite.into());
             }

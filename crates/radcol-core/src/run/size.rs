@@ -251,6 +251,40 @@ impl MemoryUse {
         }
     }
 
+    /// The same prediction with a geometric operator of `matrix` bytes
+    /// instead of the dense 8 N² (None: unchanged): a compressed one, 0
+    /// before it is built.
+    pub fn with_matrix(self, matrix: Option<f64>) -> Self {
+        match matrix {
+            None => self,
+            Some(m) => Self {
+                matrix_bytes: m,
+                predicted_peak_bytes: self.predicted_peak_bytes - self.matrix_bytes + m,
+                ..self
+            },
+        }
+    }
+
+    /// Once the compressed operator `h` is built (and resident): refuses,
+    /// with its size, when the rest of the peak exceeds nine tenths of
+    /// `available` bytes.
+    pub(crate) fn check_compressed(
+        &self,
+        h: &crate::hmatrix::HMatrix,
+        available: Option<u64>,
+    ) -> Result<(), InputError> {
+        let to_come = self.solver_bytes.max(self.estimate_bytes);
+        match available {
+            Some(a) if to_come > (a / 10 * 9) as f64 => Err(InputError::CompressedTooLarge {
+                stored: h.heap_bytes() as f64,
+                fraction: h.stats().compression(),
+                to_come,
+                available: a,
+            }),
+            _ => Ok(()),
+        }
+    }
+
     /// Records the process's high-water mark now.
     pub fn measured(self) -> Self {
         Self {

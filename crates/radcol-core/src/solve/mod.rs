@@ -127,6 +127,52 @@ impl LinearOperator for RadiosityOperator<'_> {
     }
 }
 
+/// `A = I - diag(rho) g` for any geometric operator `g` (a compressed one,
+/// for example): only products, for GMRES.
+#[derive(Clone, Copy)]
+pub struct ImplicitRadiosity<'a> {
+    /// The geometric operator.
+    pub g: &'a dyn LinearOperator,
+    /// Reflectivity at each collocation point (length `g.dim()`).
+    pub rho: &'a [f64],
+}
+
+impl<'a> ImplicitRadiosity<'a> {
+    /// Checks that `rho` has `g`'s dimension.
+    pub fn new(g: &'a dyn LinearOperator, rho: &'a [f64]) -> Result<Self, SolveError> {
+        if rho.len() != g.dim() {
+            return Err(SolveError::DimensionMismatch {
+                expected: g.dim(),
+                found: rho.len(),
+            });
+        }
+        Ok(Self { g, rho })
+    }
+}
+
+impl std::fmt::Debug for ImplicitRadiosity<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ImplicitRadiosity")
+            .field("dim", &self.g.dim())
+            .finish_non_exhaustive()
+    }
+}
+
+impl LinearOperator for ImplicitRadiosity<'_> {
+    fn dim(&self) -> usize {
+        self.g.dim()
+    }
+
+    /// `y = x - rho .* (g x)`.
+    fn apply(&self, x: &[f64], y: &mut [f64]) {
+        self.g.apply(x, y);
+        y.par_iter_mut()
+            .zip(self.rho.par_iter())
+            .zip(x.par_iter())
+            .for_each(|((yi, &r), &xi)| *yi = xi - r * *yi);
+    }
+}
+
 /// Why a solve failed.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]

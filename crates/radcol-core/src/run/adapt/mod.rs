@@ -16,18 +16,19 @@
 //! estimate stops falling under refinement are no longer split
 //! (`history.rs`); the loop then names where they are.
 
+mod budget;
 mod history;
 
 pub use history::{singular_points, SingularPoint, STALL_RATIO};
 
 use super::pipeline::{solve_step, Plans, Previous};
-use super::size::{available_memory, check_rows_stored};
 use super::{discretize, SolveConfig, SolveOutcome};
 use crate::assembly::{AssemblyBackend, Unchanged};
 use crate::error::{Error, InputError};
 use crate::geometry::barycentric_st;
 use crate::mesh::Mesh;
 use crate::problem::Problem;
+use budget::budget;
 use history::History;
 use serde::Serialize;
 use std::sync::Arc;
@@ -95,7 +96,7 @@ pub enum StopReason {
     Reached,
     /// The next step would exceed the unknowns budget.
     MaxUnknowns,
-    /// The next step's dense matrix would not fit in memory.
+    /// The next step's operator (dense, or a compressed one's pair table) would not fit in memory.
     Memory,
     /// The step limit was reached.
     MaxSteps,
@@ -111,7 +112,7 @@ impl std::fmt::Display for StopReason {
         f.write_str(match self {
             StopReason::Reached => "the estimate is below the target",
             StopReason::MaxUnknowns => "the next step would exceed the unknowns budget",
-            StopReason::Memory => "the next step's dense matrix would not fit in memory",
+            StopReason::Memory => "the next step's operator would not fit in memory",
             StopReason::MaxSteps => "the step limit was reached",
             StopReason::Singular => "the estimate is below the target except next to the points listed, where it stopped falling under refinement (typically a point where u has a direction-dependent limit, such as the foot of a block's corner on a floor)",
         })
@@ -209,7 +210,7 @@ pub fn solve_adaptive(
             // The step's peak (matrix, check rows, solver) would not fit,
             // although the budget let its matrices in: the previous step's
             // answer stands, as at any other budget stop.
-            Err(Error::Input(InputError::PeakTooLarge { .. })) if previous.is_some() => {
+            Err(Error::Input(e)) if e.is_peak_refusal() && previous.is_some() => {
                 let (outcome, _, _) = previous.take().expect("checked");
                 return Ok(AdaptOutcome {
                     outcome,
@@ -379,76 +380,6 @@ fn mark(indicator: &[f64], threshold: f64, frozen: &dyn Fn(usize) -> bool) -> Ve
         .collect();
     marked.sort_by(|&a, &b| indicator[b].total_cmp(&indicator[a]));
     marked
-}
-
-/// While a step assembles, solves and estimates, the previous step's matrix
-/// and plans are still held (they count as used in the memory available when
-/// the step is planned), and the step's matrix, its linear solver's working
-/// memory (an LU factorisation: one more matrix) or its estimate's check rows
-/// (f_c of them per element against N columns: twice the matrix at r = 1,
-/// held only where they are kept for the next step), the larger, come on
-/// top. Those may take at most this fraction of the
-/// memory available. Counting the matrix alone (at 0.6) let the Cornell box
-/// to 1e-4 plan a step of 10.2 GiB whose check rows needed 22.8 GiB more,
-/// which the step's own peak check then refused; such a refusal now also ends
-/// the loop with the previous step's answer.
-const STEP_MEMORY_FRACTION: f64 = 0.8;
-
-/// How many of the `marked` elements may be split (each adds 3 elements of
-/// `f` unknowns), or why none may.
-fn budget(
-    opts: &AdaptOptions,
-    cfg: &SolveConfig,
-    elements: usize,
-    f: usize,
-    marked: usize,
-) -> Result<usize, StopReason> {
-    let available = available_memory();
-    let solver = match cfg.solver {
-        crate::run::SolverKind::Gmres => 0.0,
-        crate::run::SolverKind::Lu => 1.0,
-    };
-    let check = if cfg.estimate {
-        crate::estimate::check_nodes(cfg.degree, cfg.alpha).len() as f64 / f as f64
-    } else {
-        0.0
-    };
-    let fits_memory = |n: u64| {
-        let matrix = 8.0 * (n as f64).powi(2);
-        // Check rows held only where they are kept for the next step.
-        let check = if check_rows_stored(check * matrix) {
-            check
-        } else {
-            0.0
-        };
-        let bytes = (1.0 + f64::max(solver, check)) * matrix;
-        !cfg.check_memory || available.is_none_or(|a| bytes <= STEP_MEMORY_FRACTION * a as f64)
-    };
-    let unknowns = |split: usize| ((elements + 3 * split) * f) as u64;
-    let allowed = |split: usize| {
-        opts.max_unknowns.is_none_or(|m| unknowns(split) <= m) && fits_memory(unknowns(split))
-    };
-    if marked == 0 || allowed(marked) {
-        return Ok(marked);
-    }
-    // The largest count that fits (the worst elements first).
-    let (mut lo, mut hi) = (0, marked);
-    while lo < hi {
-        let mid = (lo + hi).div_ceil(2);
-        if allowed(mid) {
-            lo = mid;
-        } else {
-            hi = mid - 1;
-        }
-    }
-    if lo > 0 {
-        return Ok(lo);
-    }
-    Err(if opts.max_unknowns.is_some_and(|m| unknowns(1) > m) {
-        StopReason::MaxUnknowns
-    } else {
-        StopReason::Memory
-    })
 }
 
 /// `mesh` with the elements `split` replaced in place by their four

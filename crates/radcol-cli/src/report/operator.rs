@@ -1,0 +1,88 @@
+//! The operator and memory lines of `radcol solve`: the geometric operator
+//! (dense or compressed, why, and what compression kept), and the memory
+//! predicted and measured.
+
+use radcol_core::hmatrix::HStats;
+use radcol_core::run::operator::SAMPLED_ROWS;
+use radcol_core::run::{MemoryUse, OperatorKind, SolveOutcome};
+use serde::Serialize;
+use std::fmt;
+
+/// The geometric operator a solve used.
+#[derive(Clone, Debug, Serialize)]
+pub struct OperatorReport {
+    kind: OperatorKind,
+    /// Why this kind (asked for, or what memory allowed).
+    reason: String,
+    /// Bytes of the stored numbers.
+    bytes: u64,
+    /// What the compressed operator holds; None when dense.
+    compression: Option<HStats>,
+    /// Its relative product error at sampled rows; None when dense.
+    sampled_error: Option<f64>,
+}
+
+impl OperatorReport {
+    /// The operator of `out`.
+    pub fn new(out: &SolveOutcome) -> Self {
+        Self {
+            kind: out.operator.kind(),
+            reason: out.operator_decision.reason.clone(),
+            bytes: out.operator.heap_bytes(),
+            compression: out.operator.stats(),
+            sampled_error: out.operator_decision.sampled_error,
+        }
+    }
+}
+
+fn gb(bytes: f64) -> String {
+    format!("{:.3} GB", bytes / 1e9)
+}
+
+impl fmt::Display for OperatorReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.compression {
+            None => writeln!(
+                f,
+                "  operator    dense, {}: {}",
+                gb(self.bytes as f64),
+                self.reason
+            ),
+            Some(s) => writeln!(
+                f,
+                "  operator    compressed, {} ({:.2} % of dense), product error {:.1e} at {SAMPLED_ROWS} rows: {} low-rank blocks (max rank {}{}), {} dense, {} zero (shadowed); {}",
+                gb(self.bytes as f64),
+                100.0 * s.compression(),
+                self.sampled_error.unwrap_or(f64::NAN),
+                s.low_rank_blocks,
+                s.max_rank,
+                if s.low_rank_failed > 0 {
+                    format!(", {} left dense", s.low_rank_failed)
+                } else {
+                    String::new()
+                },
+                s.dense_blocks,
+                s.zero_blocks,
+                self.reason
+            ),
+        }
+    }
+}
+
+/// The memory line: the measured peak against the prediction, when the
+/// platform measures it.
+pub fn fmt_memory(f: &mut fmt::Formatter<'_>, m: &MemoryUse) -> fmt::Result {
+    let Some(peak) = m.measured_peak_bytes else {
+        return Ok(());
+    };
+    writeln!(
+        f,
+        "  memory      peak {} measured, {} predicted after planning (resident {} + operator {} + max(solver {}, estimate {}))",
+        gb(peak),
+        gb(m.predicted_peak_bytes),
+        gb(m.after_plan_bytes),
+        gb(m.matrix_bytes),
+        gb(m.solver_bytes),
+        gb(m.estimate_bytes)
+    )
+}

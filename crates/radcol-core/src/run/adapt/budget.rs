@@ -1,0 +1,88 @@
+//! How far an adaptive step may refine within the memory available and
+//! the unknowns budget.
+
+use super::{AdaptOptions, StopReason};
+use crate::run::size::{available_memory, check_rows_stored};
+use crate::run::SolveConfig;
+
+/// While a step assembles, solves and estimates, the previous step's matrix
+/// and plans are still held (they count as used in the memory available when
+/// the step is planned), and the step's matrix, its linear solver's working
+/// memory (an LU factorisation: one more matrix) or its estimate's check rows
+/// (f_c of them per element against N columns: twice the matrix at r = 1,
+/// held only where they are kept for the next step), the larger, come on
+/// top. Those may take at most this fraction of the
+/// memory available. Counting the matrix alone (at 0.6) let the Cornell box
+/// to 1e-4 plan a step of 10.2 GiB whose check rows needed 22.8 GiB more,
+/// which the step's own peak check then refused; such a refusal now also ends
+/// the loop with the previous step's answer.
+const STEP_MEMORY_FRACTION: f64 = 0.8;
+
+/// How many of the `marked` elements may be split (each adds 3 elements of
+/// `f` unknowns), or why none may.
+pub(super) fn budget(
+    opts: &AdaptOptions,
+    cfg: &SolveConfig,
+    elements: usize,
+    f: usize,
+    marked: usize,
+) -> Result<usize, StopReason> {
+    let available = available_memory();
+    let solver = match cfg.solver {
+        crate::run::SolverKind::Gmres => 0.0,
+        crate::run::SolverKind::Lu => 1.0,
+    };
+    let check = if cfg.estimate {
+        crate::estimate::check_nodes(cfg.degree, cfg.alpha).len() as f64 / f as f64
+    } else {
+        0.0
+    };
+    // Where the pipeline may compress (GMRES, not --operator dense), a step
+    // whose dense matrix does not fit is solved compressed; the plan's pair
+    // table (a byte per element pair) is what is known to be needed, and
+    // the step's own check after the build ends the loop when the
+    // compressed operator leaves too little.
+    let may_compress = cfg.solver == crate::run::SolverKind::Gmres
+        && cfg.operator != crate::run::OperatorChoice::Dense;
+    let fits_memory = |n: u64| {
+        if may_compress {
+            let pairs = (n as f64 / f as f64).powi(2);
+            return !cfg.check_memory
+                || available.is_none_or(|a| pairs <= STEP_MEMORY_FRACTION * a as f64);
+        }
+        let matrix = 8.0 * (n as f64).powi(2);
+        // Check rows held only where they are kept for the next step.
+        let check = if check_rows_stored(check * matrix) {
+            check
+        } else {
+            0.0
+        };
+        let bytes = (1.0 + f64::max(solver, check)) * matrix;
+        !cfg.check_memory || available.is_none_or(|a| bytes <= STEP_MEMORY_FRACTION * a as f64)
+    };
+    let unknowns = |split: usize| ((elements + 3 * split) * f) as u64;
+    let allowed = |split: usize| {
+        opts.max_unknowns.is_none_or(|m| unknowns(split) <= m) && fits_memory(unknowns(split))
+    };
+    if marked == 0 || allowed(marked) {
+        return Ok(marked);
+    }
+    // The largest count that fits (the worst elements first).
+    let (mut lo, mut hi) = (0, marked);
+    while lo < hi {
+        let mid = (lo + hi).div_ceil(2);
+        if allowed(mid) {
+            lo = mid;
+        } else {
+            hi = mid - 1;
+        }
+    }
+    if lo > 0 {
+        return Ok(lo);
+    }
+    Err(if opts.max_unknowns.is_some_and(|m| unknowns(1) > m) {
+        StopReason::MaxUnknowns
+    } else {
+        StopReason::Memory
+    })
+}
