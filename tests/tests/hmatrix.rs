@@ -12,7 +12,7 @@
 use radcol_core::assembly::{AssemblyBackend, AssemblyPlan, CpuBackend, QuadratureOptions};
 use radcol_core::discretization::Discretization;
 use radcol_core::geometry::Surface;
-use radcol_core::hmatrix::radiosity::PlanEntries;
+use radcol_core::hmatrix::radiosity::{self, PlanEntries};
 use radcol_core::hmatrix::{HMatrix, HOptions};
 use radcol_core::matrix::DenseMatrix;
 use radcol_core::mesh::Mesh;
@@ -179,6 +179,50 @@ fn sphere_blocks_have_rank_one() {
     });
     assert_eq!(h.stats().max_rank, 1);
     assert!(matvec_error(&c, &h) < 1e-14);
+    // Rank 1 everywhere and no occlusion: the size predicted from the
+    // geometry alone, before any entry, is the built matrix's to the byte.
+    let disc = c.plan.discretization();
+    let p = radiosity::predict(disc, &HOptions::default(), f64::INFINITY);
+    let built = PlanEntries::new(&c.plan).build(&HOptions::default());
+    assert_eq!(p.bytes(), built.heap_bytes() as f64, "{p:?}");
+}
+
+/// The prediction from the geometry alone against the same count over the
+/// plan's pair classes, and against the matrix built. In the box room
+/// (no occlusion) the geometry finds the plan's zero blocks (coplanar
+/// walls) and its splits: the two counts agree to the byte, and the built
+/// matrix, whose far blocks have rank ≥ 1, is larger. On the Cornell box
+/// occlusion splits more blocks than the geometry sees: fewer bytes
+/// predicted than built.
+#[test]
+fn predicted_size_from_the_geometry() {
+    for (name, c) in [
+        ("room", case(scene("room"), 3, None)),
+        ("cornell", case(scene("cornell"), 0, Some(120.0))),
+    ] {
+        let opts = HOptions::default();
+        let entries = PlanEntries::new(&c.plan);
+        let geometric = radiosity::predict(c.plan.discretization(), &opts, f64::INFINITY);
+        let (rows, cols) = entries.boxes();
+        let planned = HMatrix::predict(&rows, &cols, &entries, &opts, f64::INFINITY);
+        let built = entries.build(&opts).heap_bytes() as f64;
+        println!(
+            "{name}: predicted {:.0} B from the geometry ({:.0} near), {:.0} B from the plan ({:.0} near), built {built:.0} B",
+            geometric.bytes(),
+            geometric.near_bytes,
+            planned.bytes(),
+            planned.near_bytes
+        );
+        assert!(
+            geometric.bytes() <= built && planned.bytes() <= built,
+            "{name}"
+        );
+        if name == "room" {
+            assert_eq!(geometric, planned);
+        } else {
+            assert!(geometric.bytes() < planned.bytes());
+        }
+    }
 }
 
 #[test]

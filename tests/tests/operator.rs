@@ -58,6 +58,12 @@ fn compressed(p: &Problem, tol: f64, level: u32, max_edge: Option<f64>) -> Solve
     )
     .unwrap();
     assert_eq!(out.operator.kind(), OperatorKind::Compressed);
+    // Predicted from the geometry before the plan: far blocks at rank 1,
+    // so no more than what was built on these unoccluded or lightly
+    // occluded scenes.
+    let predicted = out.operator_decision.predicted_bytes.expect("predicted");
+    let built = out.operator.heap_bytes() as f64;
+    assert!(predicted > 0.0 && predicted <= built, "{predicted} against {built}");
     out
 }
 

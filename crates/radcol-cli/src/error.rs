@@ -54,6 +54,9 @@ pub fn with_flags(err: CoreError) -> anyhow::Error {
             "{e} (flags: --level, --max-edge, --degree, --compression-tol, --no-estimate)"
         ))
         .into(),
+        CoreError::Input(e @ InputError::CompressedWontFit { .. }) => {
+            bad_input(format!("{e} (flags: --level, --max-edge, --degree)")).into()
+        }
         CoreError::Input(e @ InputError::CompressionTolerance { .. }) => {
             bad_input(format!("--compression-tol: {e}")).into()
         }

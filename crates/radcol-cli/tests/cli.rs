@@ -490,7 +490,7 @@ fn bad_input_gives_one_line_and_exit_code_two() {
     assert_one_line_error(
         &["solve", "sphere", "--level", "7", "--degree", "6"],
         2,
-        &["GiB"],
+        &["GiB", "compressed operator"],
     );
     assert_one_line_error(
         &["solve", "sphere", "--backend", "cpu", "--precision", "f32"],

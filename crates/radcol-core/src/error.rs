@@ -156,6 +156,26 @@ pub enum InputError {
         /// Bytes available.
         available: u64,
     },
+    /// The compressed operator, predicted from the geometry before anything
+    /// is computed ([`crate::hmatrix::HMatrix::predict`]), would not fit in
+    /// memory with the plan's table of element pairs.
+    #[error("{unknowns} unknowns need a compressed operator of {} {} ({} of it dense blocks near the diagonal, counted from the geometry), and {} for the table of their element pairs' classes, but only {} of memory is available; use a coarser mesh or a lower degree", if *complete { "about" } else { "more than" }, gib(*operator), gib(*near), gib(*pair_table), gib(*available as f64))]
+    CompressedWontFit {
+        /// Unknowns N.
+        unknowns: u64,
+        /// Predicted bytes of the operator (a lower count when the count
+        /// stopped at the memory available).
+        operator: f64,
+        /// Of which dense leaves.
+        near: f64,
+        /// False when the count stopped (at four times the memory
+        /// available) before the end.
+        complete: bool,
+        /// n² bytes of pair classes.
+        pair_table: f64,
+        /// Bytes available.
+        available: u64,
+    },
     /// The plan's table of element pair classes would not fit in memory.
     #[error("{} need a table of their element pairs' classes of {} (one byte per pair, kept by the assembly plan for the compressed operator too), but only {} of memory is available; use a coarser mesh", elements_text(*elements), gib(*bytes), gib(*available as f64))]
     PairTableTooLarge {
@@ -208,6 +228,7 @@ impl InputError {
             self,
             Self::PeakTooLarge { .. }
                 | Self::CompressedTooLarge { .. }
+                | Self::CompressedWontFit { .. }
                 | Self::PairTableTooLarge { .. }
         )
     }

@@ -20,6 +20,8 @@ pub struct OperatorReport {
     compression: Option<HStats>,
     /// Its relative product error at sampled rows; None when dense.
     sampled_error: Option<f64>,
+    /// Its bytes as predicted from the geometry before it was built.
+    predicted_bytes: Option<f64>,
 }
 
 impl OperatorReport {
@@ -31,6 +33,7 @@ impl OperatorReport {
             bytes: out.operator.heap_bytes(),
             compression: out.operator.stats(),
             sampled_error: out.operator_decision.sampled_error,
+            predicted_bytes: out.operator_decision.predicted_bytes,
         }
     }
 }
@@ -50,7 +53,7 @@ impl fmt::Display for OperatorReport {
             ),
             Some(s) => writeln!(
                 f,
-                "  operator    compressed, {} ({:.2} % of dense), product error {:.1e} at {SAMPLED_ROWS} rows: {} low-rank blocks (max rank {}{}), {} dense, {} zero (shadowed); {}",
+                "  operator    compressed, {} ({:.2} % of dense), product error {:.1e} at {SAMPLED_ROWS} rows: {} low-rank blocks (max rank {}{}), {} dense, {} zero (shadowed); {} predicted from the geometry; {}",
                 gb(self.bytes as f64),
                 100.0 * s.compression(),
                 self.sampled_error.unwrap_or(f64::NAN),
@@ -63,6 +66,7 @@ impl fmt::Display for OperatorReport {
                 },
                 s.dense_blocks,
                 s.zero_blocks,
+                gb(self.predicted_bytes.unwrap_or(f64::NAN)),
                 self.reason
             ),
         }

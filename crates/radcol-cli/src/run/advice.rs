@@ -32,6 +32,25 @@ pub fn sized(err: CoreError, s: &Setup) -> anyhow::Error {
             let per_element = radcol_core::nodes::nodes_per_element(s.cfg.degree) as f64;
             (0.9 * *available as f64).sqrt() * per_element
         }
+        // The operator grows like N (its dense blocks near the diagonal),
+        // the pair table like N²: the t = N'/N where the two fill 0.9 of
+        // what is available.
+        CoreError::Input(InputError::CompressedWontFit {
+            unknowns,
+            operator,
+            pair_table,
+            available,
+            ..
+        }) => {
+            let a = 0.9 * *available as f64;
+            let t = if *pair_table > 0.0 {
+                ((operator * operator + 4.0 * pair_table * a).sqrt() - operator)
+                    / (2.0 * pair_table)
+            } else {
+                a / operator
+            };
+            *unknowns as f64 * t
+        }
         _ => return with_flags(err),
     };
     let fit = fit.floor() as u64;

@@ -5,7 +5,7 @@
 //! cluster is a contiguous range. The block tree pairs a row cluster τ with a
 //! column cluster σ and stops at
 //! * **zero blocks**, proved zero before any entry is computed
-//!   ([`Entries::is_zero`]: for radiosity, clusters wholly behind each other's
+//!   ([`Structure::is_zero`]: for radiosity, clusters wholly behind each other's
 //!   planes);
 //! * **admissible blocks**, min(diam τ, diam σ) ≤ η dist(τ, σ), where the
 //!   kernel is smooth: approximated by ACA+ and recompressed to the tolerance
@@ -19,18 +19,21 @@
 
 pub mod aca;
 pub mod cluster;
+mod predict;
 pub mod radiosity;
 
 use aca::{aca_plus, recompress, Cross, LowRank};
 use cluster::{Aabb, ClusterTree};
 use rayon::prelude::*;
 use serde::Serialize;
+use std::ops::ControlFlow;
 
-/// Where a hierarchical matrix's entries come from.
-pub trait Entries: Sync {
-    /// `out[a * cols.len() + b] = A[rows[a], cols[b]]` (original indices).
-    fn block(&self, rows: &[usize], cols: &[usize], out: &mut [f64]);
+pub use predict::HPrediction;
 
+/// What is known of a matrix's blocks without computing an entry: which
+/// are zero, and which are smooth enough to compress. The block tree is
+/// made from this alone ([`HMatrix::predict`] sizes a matrix from it).
+pub trait Structure: Sync {
     /// True when the block is known to be zero without computing it. The
     /// default knows nothing.
     fn is_zero(&self, _rows: &[usize], _row_box: &Aabb, _cols: &[usize], _col_box: &Aabb) -> bool {
@@ -44,6 +47,12 @@ pub trait Entries: Sync {
     fn smooth(&self, _rows: &[usize], _row_box: &Aabb, _cols: &[usize], _col_box: &Aabb) -> bool {
         true
     }
+}
+
+/// Where a hierarchical matrix's entries come from.
+pub trait Entries: Structure {
+    /// `out[a * cols.len() + b] = A[rows[a], cols[b]]` (original indices).
+    fn block(&self, rows: &[usize], cols: &[usize], out: &mut [f64]);
 }
 
 /// How a hierarchical matrix is built.
@@ -135,7 +144,18 @@ impl HMatrix {
         let ct = ClusterTree::new(col_boxes, opts.leaf_size);
         let mut blocks = Vec::new();
         if !row_boxes.is_empty() && !col_boxes.is_empty() {
-            block_tree(&rt, &ct, 0, 0, opts.eta, entries, &mut blocks);
+            let _ = block_tree(
+                &rt,
+                &ct,
+                0,
+                0,
+                opts.eta,
+                entries,
+                &mut |r, c, admissible| {
+                    blocks.push((r, c, admissible));
+                    ControlFlow::Continue(())
+                },
+            );
         }
         let leaves: Vec<Leaf> = blocks
             .par_iter()
@@ -260,44 +280,39 @@ impl Leaf {
     }
 }
 
-/// The leaves of the block tree under (r, c): (row cluster, column cluster,
-/// admissible). An admissible pair that is not [`Entries::smooth`] is
-/// subdivided like an inadmissible one.
+/// Visits the leaves of the block tree under (r, c): (row cluster, column
+/// cluster, admissible), until `visit` breaks. An admissible pair that is
+/// not [`Structure::smooth`] is subdivided like an inadmissible one.
 fn block_tree(
     rt: &ClusterTree,
     ct: &ClusterTree,
     r: usize,
     c: usize,
     eta: f64,
-    entries: &dyn Entries,
-    out: &mut Vec<(usize, usize, bool)>,
-) {
+    structure: &dyn Structure,
+    visit: &mut dyn FnMut(usize, usize, bool) -> ControlFlow<()>,
+) -> ControlFlow<()> {
     let (rc, cc) = (&rt.clusters[r], &ct.clusters[c]);
     let dist = rc.bbox.distance(&cc.bbox);
     if dist > 0.0
         && rc.bbox.diameter().min(cc.bbox.diameter()) <= eta * dist
-        && entries.smooth(
+        && structure.smooth(
             &rt.order[rc.start..rc.end],
             &rc.bbox,
             &ct.order[cc.start..cc.end],
             &cc.bbox,
         )
     {
-        out.push((r, c, true));
-        return;
+        return visit(r, c, true);
     }
-    let mut recurse = |r, c| block_tree(rt, ct, r, c, eta, entries, out);
+    let mut recurse = |r, c| block_tree(rt, ct, r, c, eta, structure, visit);
     match (rc.children, cc.children) {
-        (None, None) => out.push((r, c, false)),
-        (Some(rs), None) => rs.iter().for_each(|&r| recurse(r, c)),
-        (None, Some(cs)) => cs.iter().for_each(|&c| recurse(r, c)),
-        (Some(rs), Some(cs)) => {
-            for &r in &rs {
-                for &c in &cs {
-                    recurse(r, c);
-                }
-            }
-        }
+        (None, None) => visit(r, c, false),
+        (Some(rs), None) => rs.iter().try_for_each(|&r| recurse(r, c)),
+        (None, Some(cs)) => cs.iter().try_for_each(|&c| recurse(r, c)),
+        (Some(rs), Some(cs)) => rs
+            .iter()
+            .try_for_each(|&r| cs.iter().try_for_each(|&c| recurse(r, c))),
     }
 }
 
@@ -355,6 +370,8 @@ impl crate::solve::LinearOperator for HMatrix {
         self.matvec(x, y);
     }
 }
+
+impl Structure for crate::matrix::DenseMatrix {}
 
 impl Entries for crate::matrix::DenseMatrix {
     fn block(&self, rows: &[usize], cols: &[usize], out: &mut [f64]) {

@@ -5,8 +5,10 @@
 //! the plan culled (facing away, or hidden) zero without a kernel call.
 
 use super::cluster::Aabb;
-use super::{Entries, HMatrix, HOptions};
+use super::{Entries, HMatrix, HOptions, HPrediction, Structure};
 use crate::assembly::plan::{AssemblyPlan, PairClass};
+use crate::discretization::Discretization;
+use glam::DVec3;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Samples of the plan's matrix, counting kernel evaluations.
@@ -34,30 +36,7 @@ impl<'a> PlanEntries<'a> {
     /// The boxes of the rows (points) and of the columns (each basis
     /// function's element, by its bounding ball).
     pub fn boxes(&self) -> (Vec<Aabb>, Vec<Aabb>) {
-        let disc = self.plan.discretization();
-        let rows = self
-            .plan
-            .rows()
-            .points()
-            .iter()
-            .map(|p| Aabb {
-                lo: p.position,
-                hi: p.position,
-            })
-            .collect();
-        let mesh = disc.mesh();
-        let f = disc.nodes_per_element();
-        let cols = (0..mesh.len())
-            .flat_map(|k| {
-                let (c, r) = mesh.bounding_ball(k);
-                let b = Aabb {
-                    lo: c - glam::DVec3::splat(r),
-                    hi: c + glam::DVec3::splat(r),
-                };
-                std::iter::repeat_n(b, f)
-            })
-            .collect();
-        (rows, cols)
+        boxes(self.plan.discretization())
     }
 
     /// The hierarchical matrix of the plan.
@@ -117,7 +96,9 @@ impl Entries for PlanEntries<'_> {
         }
         self.evals.fetch_add(evals, Ordering::Relaxed);
     }
+}
 
+impl Structure for PlanEntries<'_> {
     /// Zero when the plan culled every element pair of the block (each
     /// column element faces away from, lies behind, or is hidden from each
     /// row element).
@@ -125,37 +106,16 @@ impl Entries for PlanEntries<'_> {
         self.all_pairs(rows, cols, |c| c == PairClass::Culled)
     }
 
-    /// Smooth unless some element pair is partly visible, or a row point's
-    /// tangent plane cuts the column cluster's box, or a flat column
-    /// element's plane cuts the row cluster's box: G clamps its cosines at
-    /// 0, so its entries have a kink along those planes, and a block across
-    /// one compresses only slowly (measured on the Cornell box: a matvec
-    /// error of 4e-5 at a tolerance of 1e-6 before this test).
+    /// Smooth when its planes allow ([`planes_clear`]) and no element pair
+    /// is partly visible, nor hidden next to a visible one: G jumps to 0
+    /// along element edges where a shadow boundary follows them (no pair is
+    /// partly visible there), which ACA's samples miss at any tolerance
+    /// (on the Cornell box, ∫u off by 7.5e-6 at tolerances 1e-6 to 1e-11
+    /// before this test).
     fn smooth(&self, rows: &[usize], row_box: &Aabb, cols: &[usize], col_box: &Aabb) -> bool {
-        let one_side = |p: glam::DVec3, n: glam::DVec3, b: &Aabb| {
-            let s = b.corners().map(|c| n.dot(c - p));
-            s.iter().all(|&x| x >= 0.0) || s.iter().all(|&x| x <= 0.0)
-        };
-        let pts = self.plan.rows().points();
-        if !rows
-            .iter()
-            .all(|&i| one_side(pts[i].position, pts[i].normal, col_box))
-        {
-            return false;
-        }
-        let mesh = self.plan.discretization().mesh();
-        let f = self.plan.discretization().nodes_per_element();
-        let mut elems: Vec<usize> = cols.iter().map(|&j| j / f).collect();
-        elems.dedup();
-        let flat_ok = elems.iter().filter(|&&k| mesh.is_flat(k)).all(|&k| {
-            let p = mesh.point(k, 1.0 / 3.0, 1.0 / 3.0);
-            one_side(p.position, p.normal, row_box)
-        });
-        // Hidden pairs next to visible ones: G jumps to 0 along element
-        // edges where a shadow boundary follows them (no pair is partly
-        // visible there), which ACA's samples can miss at any tolerance.
+        let disc = self.plan.discretization();
         let (mut hidden, mut seen) = (false, false);
-        flat_ok
+        planes_clear(disc, rows, row_box, cols, col_box)
             && self.all_pairs(rows, cols, |c| {
                 match c {
                     PairClass::Partial => return false,
@@ -199,4 +159,106 @@ fn consecutive_runs(sorted: &[usize]) -> Vec<std::ops::Range<usize>> {
         }
     }
     runs
+}
+
+/// The boxes of `disc`'s rows (its collocation points) and columns (each
+/// basis function's element, by its bounding ball).
+fn boxes(disc: &Discretization) -> (Vec<Aabb>, Vec<Aabb>) {
+    let rows = disc
+        .points()
+        .iter()
+        .map(|p| Aabb {
+            lo: p.position,
+            hi: p.position,
+        })
+        .collect();
+    let mesh = disc.mesh();
+    let f = disc.nodes_per_element();
+    let cols = (0..mesh.len())
+        .flat_map(|k| {
+            let (c, r) = mesh.bounding_ball(k);
+            let b = Aabb {
+                lo: c - DVec3::splat(r),
+                hi: c + DVec3::splat(r),
+            };
+            std::iter::repeat_n(b, f)
+        })
+        .collect();
+    (rows, cols)
+}
+
+/// Whether the box lies wholly on one side of the plane through `p` with
+/// normal `n`.
+fn one_side(p: DVec3, n: DVec3, b: &Aabb) -> bool {
+    let s = b.corners().map(|c| n.dot(c - p));
+    s.iter().all(|&x| x >= 0.0) || s.iter().all(|&x| x <= 0.0)
+}
+
+/// The distinct elements of columns `cols` (basis functions, f per element,
+/// consecutive).
+fn column_elements(disc: &Discretization, cols: &[usize]) -> Vec<usize> {
+    let f = disc.nodes_per_element();
+    let mut elems: Vec<usize> = cols.iter().map(|&j| j / f).collect();
+    elems.dedup();
+    elems
+}
+
+/// False when a row point's tangent plane cuts the column cluster's box, or
+/// a flat column element's plane cuts the row cluster's box: G clamps its
+/// cosines at 0, so its entries have a kink along those planes, and a block
+/// across one compresses only slowly (on the Cornell box: a product error
+/// of 4e-5 at a tolerance of 1e-6 before this test).
+fn planes_clear(
+    disc: &Discretization,
+    rows: &[usize],
+    row_box: &Aabb,
+    cols: &[usize],
+    col_box: &Aabb,
+) -> bool {
+    let pts = disc.points();
+    let mesh = disc.mesh();
+    rows.iter()
+        .all(|&i| one_side(pts[i].position, pts[i].normal, col_box))
+        && column_elements(disc, cols)
+            .into_iter()
+            .filter(|&k| mesh.is_flat(k))
+            .all(|k| {
+                let p = mesh.point(k, 1.0 / 3.0, 1.0 / 3.0);
+                one_side(p.position, p.normal, row_box)
+            })
+}
+
+/// The structure of a discretization's geometric matrix from its geometry
+/// alone, before any plan: the planes of [`planes_clear`] decide
+/// smoothness, and a block is zero when every column element is flat and
+/// every row point lies on or behind its plane (coplanar and back-to-back
+/// pieces). Occlusion is not known here: it can only make more blocks zero
+/// and split more, which [`predict`] leaves out.
+struct Geometry<'a>(&'a Discretization);
+
+impl Structure for Geometry<'_> {
+    fn is_zero(&self, rows: &[usize], _: &Aabb, cols: &[usize], _: &Aabb) -> bool {
+        let (disc, pts) = (self.0, self.0.points());
+        let mesh = disc.mesh();
+        column_elements(disc, cols).into_iter().all(|k| {
+            let p = mesh.point(k, 1.0 / 3.0, 1.0 / 3.0);
+            mesh.is_flat(k)
+                && rows
+                    .iter()
+                    .all(|&i| p.normal.dot(pts[i].position - p.position) <= 0.0)
+        })
+    }
+
+    fn smooth(&self, rows: &[usize], row_box: &Aabb, cols: &[usize], col_box: &Aabb) -> bool {
+        planes_clear(self.0, rows, row_box, cols, col_box)
+    }
+}
+
+/// What the compressed geometric matrix of `disc` will store
+/// ([`HMatrix::predict`]), from the geometry alone (no assembly plan),
+/// stopping once past `limit` bytes. Exact for the dense leaves of a
+/// surface without occlusion; occlusion stores less near the diagonal.
+pub fn predict(disc: &Discretization, opts: &HOptions, limit: f64) -> HPrediction {
+    let (rows, cols) = boxes(disc);
+    HMatrix::predict(&rows, &cols, &Geometry(disc), opts, limit)
 }

@@ -2,10 +2,13 @@
 //! hierarchical matrix of [`crate::hmatrix`] (the same entries, far blocks
 //! compressed to a relative tolerance), and why.
 
-use super::size::{available_memory, MemoryEstimate};
+use super::size::{available_memory, MemoryEstimate, MemoryUse};
 use super::{SolveConfig, SolverKind};
+use crate::assembly::AssemblyPlan;
+use crate::discretization::Discretization;
 use crate::error::InputError;
-use crate::hmatrix::{HMatrix, HStats};
+use crate::hmatrix::radiosity::PlanEntries;
+use crate::hmatrix::{HMatrix, HPrediction, HStats};
 use crate::matrix::DenseMatrix;
 use crate::solve::LinearOperator;
 use serde::Serialize;
@@ -49,6 +52,9 @@ pub struct OperatorDecision {
     /// [`SAMPLED_ROWS`] rows against their exact entries
     /// ([`crate::hmatrix::HMatrix::sampled_error`]); None when dense.
     pub sampled_error: Option<f64>,
+    /// The compressed operator's bytes as predicted from the geometry
+    /// before it was built ([`HPrediction::bytes`]); None when dense.
+    pub predicted_bytes: Option<f64>,
 }
 
 /// Rows of the dense matrix computed to check a compressed operator.
@@ -62,6 +68,7 @@ impl OperatorDecision {
             reason: format!("the dense solve would not fit ({why}); compressed instead"),
             switchable: false,
             sampled_error: None,
+            predicted_bytes: None,
         }
     }
 }
@@ -90,6 +97,7 @@ pub fn decide(
             reason,
             switchable: false,
             sampled_error: None,
+            predicted_bytes: None,
         })
     };
     match (cfg.operator, cfg.solver) {
@@ -113,6 +121,7 @@ pub fn decide(
             ),
             switchable: true,
             sampled_error: None,
+            predicted_bytes: None,
         }),
         (OperatorChoice::Auto, SolverKind::Gmres) => decision(
             OperatorKind::Compressed,
@@ -156,6 +165,63 @@ pub(crate) fn decide_now(
         }
     }
     Ok(d)
+}
+
+/// The compressed operator of `disc` under `cfg`, predicted from the
+/// geometry ([`crate::hmatrix::radiosity::predict`], counted no further
+/// than four times the memory available); when `cfg.check_memory`, refused where
+/// with the plan's n² bytes of pair classes it passes nine tenths of the
+/// memory available.
+///
+/// # Errors
+/// [`InputError::CompressedWontFit`].
+pub(crate) fn predict_compressed(
+    disc: &Discretization,
+    cfg: &SolveConfig,
+) -> Result<HPrediction, InputError> {
+    let available = available_memory().filter(|_| cfg.check_memory);
+    let pair_table = (disc.mesh().len() as f64).powi(2);
+    // Counted on past what fits, to four times as much, so that a refusal
+    // can say how much coarser would fit.
+    let limit = available.map_or(f64::INFINITY, |a| 4.0 * (a / 10 * 9) as f64);
+    let p = crate::hmatrix::radiosity::predict(disc, &cfg.compression, limit);
+    match available {
+        Some(a) if pair_table + p.bytes() > (a / 10 * 9) as f64 => {
+            Err(InputError::CompressedWontFit {
+                unknowns: disc.len() as u64,
+                operator: p.bytes(),
+                near: p.near_bytes,
+                complete: p.complete,
+                pair_table,
+                available: a,
+            })
+        }
+        _ => Ok(p),
+    }
+}
+
+/// Builds the compressed operator from `plan`'s integrators, measures its
+/// product error at [`SAMPLED_ROWS`] rows into `decision`, and puts its
+/// size into `memory` (refused, when `cfg.check_memory`, where the rest of
+/// the peak no longer fits); returns it with its kernel evaluations.
+///
+/// # Errors
+/// [`InputError::CompressedTooLarge`].
+pub(crate) fn build_compressed(
+    plan: &AssemblyPlan,
+    cfg: &SolveConfig,
+    decision: &mut OperatorDecision,
+    memory: &mut MemoryUse,
+) -> Result<(HMatrix, u64), InputError> {
+    let entries = PlanEntries::new(plan);
+    let h = entries.build(&cfg.compression);
+    decision.sampled_error = Some(h.sampled_error(&entries, SAMPLED_ROWS));
+    // Not predicted again: the resident set now holds the operator.
+    *memory = memory.with_matrix(Some(h.heap_bytes() as f64));
+    if cfg.check_memory {
+        memory.check_compressed(&h, available_memory())?;
+    }
+    Ok((h, entries.evaluations()))
 }
 
 /// The geometric operator Gm of a solve (no ρ: every channel, emission and

@@ -1,7 +1,10 @@
 //! The stages of one solve (see the module overview in [`super`]).
 
 use super::inputs::{check_quadrature, discretize, fields};
-use super::operator::{decide_now, GeometricOperator, OperatorDecision, OperatorKind};
+use super::operator::{
+    build_compressed, decide_now, predict_compressed, GeometricOperator, OperatorDecision,
+    OperatorKind,
+};
 use super::relight::Relighter;
 use super::size::{available_memory, check_rows_stored, MemoryUse};
 use super::{ChannelResult, SolveConfig, SolveOutcome, Timings};
@@ -12,7 +15,6 @@ use crate::error::Error;
 use crate::estimate::{
     check_matrix, check_nodes, estimate, estimate_from, ChannelFields, ESTIMATE_QUAD_TOL,
 };
-use crate::hmatrix::radiosity::PlanEntries;
 use crate::matrix::DenseMatrix;
 use crate::mesh::Mesh;
 use crate::nodes::NodeSet;
@@ -66,6 +68,12 @@ fn assemble(
 ) -> Result<Built, Error> {
     let mut decision = decide_now(cfg, disc.len() as u64, disc.mesh().len() as u64)?;
     let compressed = decision.kind == OperatorKind::Compressed;
+    // The compressed operator is sized from the geometry before the plan's
+    // n² pair classes and the hours of entries a size that cannot fit
+    // would take.
+    if compressed {
+        decision.predicted_bytes = Some(predict_compressed(disc, cfg)?.bytes());
+    }
     let progress = cfg.progress.clone();
     let before = super::size::process_memory().map(|(rss, _)| rss);
     let plan = match previous {
@@ -97,16 +105,17 @@ fn assemble(
         )
         .with_matrix(matrix_bytes)
     };
-    // The compressed operator's size is known once it is built: until then
-    // only the rest of the peak is checked. Where auto chose dense but the
-    // dense solve's whole peak does not fit, it compresses instead.
-    let mut memory = predict(compressed.then_some(0.0));
+    // The compressed operator counts at its predicted size (checked again
+    // once built). Where auto chose dense but the dense solve's whole peak
+    // does not fit, it compresses instead.
+    let mut memory = predict(decision.predicted_bytes);
     if cfg.check_memory {
         let available = available_memory();
         match memory.check(available) {
             Err(e) if !compressed && decision.switchable => {
                 decision = decision.compress_instead(&e);
-                memory = predict(Some(0.0));
+                decision.predicted_bytes = Some(predict_compressed(disc, cfg)?.bytes());
+                memory = predict(decision.predicted_bytes);
                 memory.check(available)?;
             }
             r => r?,
@@ -118,20 +127,12 @@ fn assemble(
     }
     let dense_previous = previous.and_then(|p| p.outcome.operator.dense());
     let (operator, kernel_evals, device_seconds, info) = if compressed {
-        let entries = PlanEntries::new(&plan);
-        let h = entries.build(&cfg.compression);
-        decision.sampled_error = Some(h.sampled_error(&entries, super::operator::SAMPLED_ROWS));
-        // Not predicted again: the resident set now holds the operator.
-        memory = memory.with_matrix(Some(h.heap_bytes() as f64));
-        if cfg.check_memory {
-            memory.check_compressed(&h, available_memory())?;
-        }
-        let info = CpuBackend.info();
+        let (h, evals) = build_compressed(&plan, cfg, &mut decision, &mut memory)?;
         (
             GeometricOperator::Compressed(h),
-            entries.evaluations(),
+            evals,
             None,
-            info,
+            CpuBackend.info(),
         )
     } else {
         let assembled = match dense_previous {

@@ -1,0 +1,124 @@
+//! What a hierarchical matrix will store, from its block tree alone: no
+//! entry is computed, so a matrix that cannot fit is refused before the
+//! hours its entries would take.
+
+use super::cluster::{Aabb, ClusterTree};
+use super::{block_tree, HMatrix, HOptions, Leaf, Structure};
+use serde::Serialize;
+use std::ops::ControlFlow;
+
+/// The bytes a hierarchical matrix will take: its dense leaves exactly
+/// (those the structure does not prove zero), its low-rank leaves at rank 1
+/// (at least that; most are higher), and its orders and leaf records.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct HPrediction {
+    /// Bytes of the dense leaves: 8 m n each.
+    pub near_bytes: f64,
+    /// Bytes of the admissible leaves at rank 1: 8 (m + n) each.
+    pub far_min_bytes: f64,
+    /// Bytes of the row and column orders and of the leaf records.
+    pub index_bytes: f64,
+    /// False when the count stopped at its limit (the figures are then
+    /// those reached: the matrix takes more).
+    pub complete: bool,
+}
+
+impl HPrediction {
+    /// All of it.
+    pub fn bytes(&self) -> f64 {
+        self.near_bytes + self.far_min_bytes + self.index_bytes
+    }
+}
+
+impl HMatrix {
+    /// What [`HMatrix::build`] with these boxes, `structure` and `opts` will
+    /// store, counted over its block tree without computing an entry
+    /// (equal to its [`HMatrix::heap_bytes`] when every low-rank block has
+    /// rank 1 and no cross grows into a dense block), stopping once the
+    /// count passes `limit` bytes.
+    pub fn predict(
+        row_boxes: &[Aabb],
+        col_boxes: &[Aabb],
+        structure: &dyn Structure,
+        opts: &HOptions,
+        limit: f64,
+    ) -> HPrediction {
+        let rt = ClusterTree::new(row_boxes, opts.leaf_size);
+        let ct = ClusterTree::new(col_boxes, opts.leaf_size);
+        let mut p = HPrediction {
+            near_bytes: 0.0,
+            far_min_bytes: 0.0,
+            index_bytes: 8.0 * (row_boxes.len() + col_boxes.len()) as f64,
+            complete: true,
+        };
+        if row_boxes.is_empty() || col_boxes.is_empty() {
+            return p;
+        }
+        let record = std::mem::size_of::<Leaf>() as f64;
+        let flow = block_tree(
+            &rt,
+            &ct,
+            0,
+            0,
+            opts.eta,
+            structure,
+            &mut |r, c, admissible| {
+                let (rc, cc) = (&rt.clusters[r], &ct.clusters[c]);
+                let (m, n) = (rc.len() as f64, cc.len() as f64);
+                p.index_bytes += record;
+                if admissible {
+                    p.far_min_bytes += 8.0 * (m + n);
+                } else if !structure.is_zero(
+                    &rt.order[rc.start..rc.end],
+                    &rc.bbox,
+                    &ct.order[cc.start..cc.end],
+                    &cc.bbox,
+                ) {
+                    p.near_bytes += 8.0 * m * n;
+                }
+                if p.bytes() > limit {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                }
+            },
+        );
+        p.complete = flow.is_continue();
+        p
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::matrix::DenseMatrix;
+    use glam::DVec3;
+
+    /// Points on a helix, and the rank-1 matrix a_i b_j over them: every
+    /// admissible block has rank 1 exactly, so the prediction is the
+    /// built matrix's size to the byte; a limit stops the count past it.
+    #[test]
+    fn a_rank_one_matrix_is_predicted_exactly() {
+        let n = 700;
+        let boxes: Vec<Aabb> = (0..n)
+            .map(|k| {
+                let t = k as f64 * 0.05;
+                let p = DVec3::new(t.cos(), t.sin(), 0.1 * t);
+                Aabb { lo: p, hi: p }
+            })
+            .collect();
+        let a = |i: usize| 1.0 + (i as f64 * 0.37).sin().abs();
+        let data = (0..n * n).map(|k| a(k / n) * a(k % n + 3)).collect();
+        let m = DenseMatrix::from_row_major(n, n, data);
+        let opts = HOptions::default();
+        let h = HMatrix::build(&boxes, &boxes, &m, &opts);
+        assert!(h.stats().low_rank_blocks > 10, "{:?}", h.stats());
+        assert_eq!(h.stats().max_rank, 1);
+        let p = HMatrix::predict(&boxes, &boxes, &m, &opts, f64::INFINITY);
+        assert!(p.complete);
+        assert_eq!(p.bytes(), h.heap_bytes() as f64, "{p:?}");
+        let stopped = HMatrix::predict(&boxes, &boxes, &m, &opts, 0.5 * p.bytes());
+        assert!(!stopped.complete);
+        assert!(stopped.bytes() > 0.5 * p.bytes() && stopped.bytes() < p.bytes());
+    }
+}
