@@ -63,7 +63,10 @@ fn compressed(p: &Problem, tol: f64, level: u32, max_edge: Option<f64>) -> Solve
     // occluded scenes.
     let predicted = out.operator_decision.predicted_bytes.expect("predicted");
     let built = out.operator.heap_bytes() as f64;
-    assert!(predicted > 0.0 && predicted <= built, "{predicted} against {built}");
+    assert!(
+        predicted > 0.0 && predicted <= built,
+        "{predicted} against {built}"
+    );
     out
 }
 
