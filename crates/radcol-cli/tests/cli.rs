@@ -1446,3 +1446,33 @@ fn quiet_silences_the_step_lines() {
     };
     assert_eq!(strip(&loud).len(), strip(&quiet).len());
 }
+
+/// `radcol info` predicts the compressed operator from the geometry; on
+/// the sphere every far block has rank 1 exactly (G ≡ 1/(4π R²)), so the
+/// prediction is the size a compressed solve then builds, to the byte.
+#[test]
+fn info_predicts_the_compressed_operator() {
+    let args = ["sphere", "--level", "3", "--degree", "2"];
+    let info = stdout_json(&radcol(&[&["info"], &args[..], &["--json"]].concat()));
+    let p = &info["compressed"]["prediction"];
+    assert_eq!(p["complete"], true, "{p}");
+    let predicted = num(p, "near_bytes") + num(p, "far_min_bytes") + num(p, "index_bytes");
+    assert!(num(p, "far_min_bytes") > 0.0, "{p}");
+    assert_eq!(num(&info["compressed"], "pair_table_bytes"), 512.0 * 512.0);
+    let solve = [
+        &["solve"],
+        &args[..],
+        &["--operator", "compressed", "--no-estimate", "--json"],
+    ]
+    .concat();
+    let out = stdout_json(&radcol(&solve));
+    assert_eq!(
+        num(&out["operator"], "bytes"),
+        predicted,
+        "{}",
+        out["operator"]
+    );
+    let text =
+        String::from_utf8_lossy(&radcol_ok(&[&["info"], &args[..]].concat()).stdout).to_string();
+    assert!(text.contains("compressed      about"), "{text}");
+}

@@ -45,6 +45,9 @@ pub struct InfoReport {
     pub unknowns: u64,
     /// Memory of the dense matrices.
     pub memory: MemoryEstimate,
+    /// The compressed operator's size predicted from the geometry, when
+    /// the job's mesh was built.
+    pub compressed: Option<CompressedInfo>,
     /// Whether visibility tests are needed, and why.
     pub visibility: radcol_core::visibility::VisibilityAnalysis,
     /// Triangles, materials and emitters of a scene with materials.
@@ -139,6 +142,15 @@ pub struct ShapeRatio {
     pub max: f64,
 }
 
+/// What `--operator compressed` would store, before anything is computed.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct CompressedInfo {
+    /// The hierarchical matrix's bytes ([`radcol_core::hmatrix::HMatrix::predict`]).
+    pub prediction: radcol_core::hmatrix::HPrediction,
+    /// The plan's table of element pair classes: n² bytes.
+    pub pair_table_bytes: f64,
+}
+
 impl InfoReport {
     /// The count with a maximum edge stops at `MAX_EDGE_COUNT_CAP` elements
     /// and saturates: no dense matrix of that size fits anywhere.
@@ -173,6 +185,18 @@ impl InfoReport {
             yes(i.memory.fits_gmres),
             gib(i.memory.matrix_bytes + i.memory.lu_extra_bytes),
             yes(i.memory.fits_lu)
+        )?;
+        let Some(c) = &i.compressed else {
+            return Ok(());
+        };
+        let p = &c.prediction;
+        writeln!(
+            w,
+            "  compressed      {} {} from the geometry ({} dense near the diagonal, far blocks at rank 1; occlusion splits more), and {} of pair classes",
+            if p.complete { "about" } else { "more than" },
+            gib(p.bytes()),
+            gib(p.near_bytes),
+            gib(c.pair_table_bytes)
         )
     }
 }

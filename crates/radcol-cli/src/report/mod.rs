@@ -14,7 +14,8 @@ mod trust;
 pub use adapt::{AdaptLine, AdaptReport};
 pub use compare::{ComparisonReport, DegreePart, Fastest};
 pub use info::{
-    BoundingBox, ElementSize, Estimate, InfoReport, MaterialInfo, SceneInfo, ShapeRatio,
+    BoundingBox, CompressedInfo, ElementSize, Estimate, InfoReport, MaterialInfo, SceneInfo,
+    ShapeRatio,
 };
 pub use nodes::NodesReport;
 pub use solve::{SolveReport, Written};

@@ -3,7 +3,8 @@
 //! with the sizes, visibility decision and an assembly estimate.
 
 use crate::report::{
-    self, BoundingBox, ElementSize, Estimate, InfoReport, MaterialInfo, SceneInfo, ShapeRatio,
+    self, BoundingBox, CompressedInfo, ElementSize, Estimate, InfoReport, MaterialInfo, SceneInfo,
+    ShapeRatio,
 };
 use crate::scene::Loaded;
 use crate::setup::{default_refinement, load};
@@ -13,6 +14,7 @@ use radcol_core::alpha0::auto_alpha;
 use radcol_core::assembly::{AssemblyPlan, FillMode, QuadratureOptions};
 use radcol_core::discretization::Discretization;
 use radcol_core::geometry::Surface;
+use radcol_core::hmatrix::HOptions;
 use radcol_core::mesh::Mesh;
 use radcol_core::nodes::NodeSet;
 use radcol_core::run::MemoryEstimate;
@@ -115,6 +117,9 @@ fn info_report(job: &Refinement, loaded: &Loaded) -> InfoReport {
         measured_level,
         unknowns,
         memory: MemoryEstimate::new(unknowns),
+        compressed: (measured_level == job.level)
+            .then(|| predict_compressed(job.degree, &mesh))
+            .flatten(),
         visibility: vis,
         contents: loaded.scene().map(|sc| scene_info(sc)),
         estimate,
@@ -156,6 +161,18 @@ fn scene_info(sc: &radcol_core::scene::Scene) -> SceneInfo {
             .collect(),
         warnings: sc.warnings.clone(),
     }
+}
+
+/// The compressed operator's size on `mesh` at `degree`, from the
+/// geometry alone, counted up to four times the memory available.
+fn predict_compressed(degree: usize, mesh: &Arc<Mesh>) -> Option<CompressedInfo> {
+    let nodes = NodeSet::new(degree, auto_alpha(degree)).ok()?;
+    let disc = Discretization::new(Arc::clone(mesh), nodes);
+    let limit = radcol_core::run::available_memory().map_or(f64::INFINITY, |a| 4.0 * a as f64);
+    Some(CompressedInfo {
+        prediction: radcol_core::hmatrix::radiosity::predict(&disc, &HOptions::default(), limit),
+        pair_table_bytes: (mesh.len() as f64).powi(2),
+    })
 }
 
 /// Row blocks timed by `radcol info` to estimate the assembly time.
