@@ -140,23 +140,11 @@ impl HMatrix {
         entries: &dyn Entries,
         opts: &HOptions,
     ) -> Self {
-        let rt = ClusterTree::new(row_boxes, opts.leaf_size);
-        let ct = ClusterTree::new(col_boxes, opts.leaf_size);
         let mut blocks = Vec::new();
-        if !row_boxes.is_empty() && !col_boxes.is_empty() {
-            let _ = block_tree(
-                &rt,
-                &ct,
-                0,
-                0,
-                opts.eta,
-                entries,
-                &mut |r, c, admissible| {
-                    blocks.push((r, c, admissible));
-                    ControlFlow::Continue(())
-                },
-            );
-        }
+        let (rt, ct, _) = partition(row_boxes, col_boxes, entries, opts, &mut |_, _, r, c, a| {
+            blocks.push((r, c, a));
+            ControlFlow::Continue(())
+        });
         let leaves: Vec<Leaf> = blocks
             .par_iter()
             .map(|&(r, c, admissible)| leaf(&rt, &ct, r, c, admissible, entries, opts.tol))
@@ -278,6 +266,32 @@ impl Leaf {
             LeafData::LowRank(lr) => lr.apply_add(x, y),
         }
     }
+}
+
+/// A visitor of block-tree leaves: (row tree, column tree, row cluster,
+/// column cluster, admissible).
+type Visit<'a> = dyn FnMut(&ClusterTree, &ClusterTree, usize, usize, bool) -> ControlFlow<()> + 'a;
+
+/// The cluster trees of `row_boxes` and `col_boxes` (leaves of
+/// `opts.leaf_size`), with the leaves of their block tree visited until
+/// `visit` breaks (none when either side is empty), and whether it did.
+fn partition(
+    row_boxes: &[Aabb],
+    col_boxes: &[Aabb],
+    structure: &dyn Structure,
+    opts: &HOptions,
+    visit: &mut Visit<'_>,
+) -> (ClusterTree, ClusterTree, ControlFlow<()>) {
+    let rt = ClusterTree::new(row_boxes, opts.leaf_size);
+    let ct = ClusterTree::new(col_boxes, opts.leaf_size);
+    let flow = if row_boxes.is_empty() || col_boxes.is_empty() {
+        ControlFlow::Continue(())
+    } else {
+        block_tree(&rt, &ct, 0, 0, opts.eta, structure, &mut |r, c, a| {
+            visit(&rt, &ct, r, c, a)
+        })
+    };
+    (rt, ct, flow)
 }
 
 /// Visits the leaves of the block tree under (r, c): (row cluster, column

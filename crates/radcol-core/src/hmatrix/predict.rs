@@ -2,8 +2,8 @@
 //! entry is computed, so a matrix that cannot fit is refused before the
 //! hours its entries would take.
 
-use super::cluster::{Aabb, ClusterTree};
-use super::{block_tree, HMatrix, HOptions, Leaf, Structure};
+use super::cluster::Aabb;
+use super::{partition, HMatrix, HOptions, Leaf, Structure};
 use serde::Serialize;
 use std::ops::ControlFlow;
 
@@ -43,26 +43,19 @@ impl HMatrix {
         opts: &HOptions,
         limit: f64,
     ) -> HPrediction {
-        let rt = ClusterTree::new(row_boxes, opts.leaf_size);
-        let ct = ClusterTree::new(col_boxes, opts.leaf_size);
         let mut p = HPrediction {
             near_bytes: 0.0,
             far_min_bytes: 0.0,
             index_bytes: 8.0 * (row_boxes.len() + col_boxes.len()) as f64,
             complete: true,
         };
-        if row_boxes.is_empty() || col_boxes.is_empty() {
-            return p;
-        }
         let record = std::mem::size_of::<Leaf>() as f64;
-        let flow = block_tree(
-            &rt,
-            &ct,
-            0,
-            0,
-            opts.eta,
+        let (_, _, flow) = partition(
+            row_boxes,
+            col_boxes,
             structure,
-            &mut |r, c, admissible| {
+            opts,
+            &mut |rt, ct, r, c, admissible| {
                 let (rc, cc) = (&rt.clusters[r], &ct.clusters[c]);
                 let (m, n) = (rc.len() as f64, cc.len() as f64);
                 p.index_bytes += record;
