@@ -2,8 +2,8 @@
 
 use super::inputs::{check_quadrature, discretize, fields};
 use super::operator::{
-    build_compressed, decide_now, predict_compressed, GeometricOperator, OperatorDecision,
-    OperatorKind,
+    build_compressed, decide_now, lighter_than_dense, predict_compressed, GeometricOperator,
+    OperatorDecision, OperatorKind,
 };
 use super::relight::Relighter;
 use super::size::{available_memory, check_rows_stored, MemoryUse};
@@ -105,22 +105,7 @@ fn assemble(
         )
         .with_matrix(matrix_bytes)
     };
-    // The compressed operator counts at its predicted size (checked again
-    // once built). Where auto chose dense but the dense solve's whole peak
-    // does not fit, it compresses instead.
-    let mut memory = predict(decision.predicted_bytes);
-    if cfg.check_memory {
-        let available = available_memory();
-        match memory.check(available) {
-            Err(e) if !compressed && decision.switchable => {
-                decision = decision.compress_instead(&e);
-                decision.predicted_bytes = Some(predict_compressed(disc, cfg)?.bytes());
-                memory = predict(decision.predicted_bytes);
-                memory.check(available)?;
-            }
-            r => r?,
-        }
-    }
+    let mut memory = settle(&mut decision, disc, cfg, &predict)?;
     let compressed = decision.kind == OperatorKind::Compressed;
     if let Some(p) = &cfg.progress {
         p.start("assembly", disc.mesh().len() as u64);
@@ -156,6 +141,41 @@ fn assemble(
         backend: info,
         memory,
     })
+}
+
+/// The memory a solve will use with the operator `decision` finally
+/// stores (`predict`: the prediction for a matrix of so many bytes, None
+/// dense). The compressed operator counts at its predicted size (checked
+/// again once built). Where auto chose dense but the dense solve's whole
+/// peak does not fit, it compresses instead; where it fits but would take
+/// much of the memory and the compressed operator is predicted far
+/// smaller, too ([`lighter_than_dense`]).
+fn settle(
+    decision: &mut OperatorDecision,
+    disc: &Discretization,
+    cfg: &SolveConfig,
+    predict: &dyn Fn(Option<f64>) -> MemoryUse,
+) -> Result<MemoryUse, Error> {
+    let mut memory = predict(decision.predicted_bytes);
+    let compressed = decision.kind == OperatorKind::Compressed;
+    if cfg.check_memory {
+        let available = available_memory();
+        match memory.check(available) {
+            Err(e) if !compressed && decision.switchable => {
+                *decision = decision.compress_instead(&e);
+                decision.predicted_bytes = Some(predict_compressed(disc, cfg)?.bytes());
+                memory = predict(decision.predicted_bytes);
+                memory.check(available)?;
+            }
+            r => r?,
+        }
+    }
+    let to_come = memory.predicted_peak_bytes - memory.after_plan_bytes;
+    if let Some(d) = lighter_than_dense(decision, disc, cfg, to_come, available_memory()) {
+        *decision = d;
+        memory = predict(decision.predicted_bytes);
+    }
+    Ok(memory)
 }
 
 /// Estimates every channel's error at the check points of its mesh
