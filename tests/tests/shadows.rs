@@ -284,3 +284,62 @@ fn uniform_refinement_of_the_shadow_family() {
         }
     }
 }
+
+/// The shadow family refined adaptively to 1e-4 at r = 1..3: for every
+/// decade 1e-2, 1e-3, 1e-4 the first step whose true max error (sampled
+/// everywhere, relative to max u) is below it, with its unknowns and the
+/// seconds of all steps up to it, and the estimate's effectivity at every
+/// step (slow, minutes: `cargo test --release -p radcol-tests --test
+/// integration shadows::to_1e_4 -- --ignored --nocapture`; the figures are
+/// the README's).
+#[test]
+#[ignore]
+fn to_1e_4_on_the_shadow_family() {
+    for case in cases() {
+        let p = problem(&case);
+        for degree in 1..=3 {
+            let cfg = SolveConfig {
+                degree,
+                alpha: auto_alpha(degree),
+                level: 1,
+                ..Default::default()
+            };
+            let opts = AdaptOptions {
+                target: 1e-4,
+                max_unknowns: Some(150_000),
+                ..Default::default()
+            };
+            let res = solve_adaptive(&p, &cfg, &opts, &CpuBackend, |_| {}).expect("solves");
+            let mut seconds = 0.0;
+            let mut decade = 1e-2;
+            let mut effectivity = (f64::INFINITY, 0.0f64);
+            for s in &res.steps {
+                seconds += s.seconds;
+                let t = s.true_error.unwrap();
+                let eff = s.estimate / t;
+                effectivity = (effectivity.0.min(eff), effectivity.1.max(eff));
+                while t <= decade && decade >= 1e-4 {
+                    println!(
+                        "{} r = {degree}: true {t:.2e} <= {decade:.0e} at {} unknowns, {seconds:.1} s (estimate {:.2e})",
+                        case.name, s.unknowns, s.estimate
+                    );
+                    decade /= 10.0;
+                }
+            }
+            let last = res.steps.last().unwrap();
+            println!(
+                "{} r = {degree}: {:?} after {} steps, {} unknowns, true {:.2e}, estimate {:.2e}, effectivity {:.2}..{:.2}, {:.1} s, operator {:?}",
+                case.name,
+                res.stop,
+                res.steps.len(),
+                last.unknowns,
+                last.true_error.unwrap(),
+                last.estimate,
+                effectivity.0,
+                effectivity.1,
+                seconds,
+                res.outcome.operator.kind()
+            );
+        }
+    }
+}
