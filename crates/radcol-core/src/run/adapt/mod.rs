@@ -49,6 +49,12 @@ pub struct AdaptOptions {
     /// below 1, elements about to cross the target are split in the same
     /// step (fewer solves for a few more unknowns).
     pub mark_fraction: f64,
+    /// ...and exceeds `max_fraction` of the largest estimate of an element
+    /// that may still be split: worst first, so that each step's mesh is
+    /// the one its error needs, and a budget that stops the loop leaves the
+    /// best mesh for its size (0: every element above the target's
+    /// fraction, at once).
+    pub max_fraction: f64,
     /// An element is split at most this many times beyond the starting
     /// mesh. Where u has a direction-dependent limit at a point (the foot of
     /// a block's corner on a floor: walls and penumbra wedges meet there, and
@@ -65,6 +71,9 @@ pub struct AdaptOptions {
     pub stall_generations: u32,
 }
 
+/// The default [`AdaptOptions::max_fraction`].
+pub const MAX_FRACTION: f64 = 0.25;
+
 impl Default for AdaptOptions {
     fn default() -> Self {
         Self {
@@ -72,6 +81,7 @@ impl Default for AdaptOptions {
             max_unknowns: None,
             max_steps: 25,
             mark_fraction: 0.5,
+            max_fraction: MAX_FRACTION,
             max_depth: 10,
             stall_generations: 3,
         }
@@ -300,7 +310,13 @@ fn decide(
     };
     let marked = match stop {
         Some(_) => Vec::new(),
-        None => mark(indicator, opts.mark_fraction * opts.target, frozen),
+        None => {
+            let worst = (0..indicator.len())
+                .filter(|&k| !frozen(k))
+                .fold(0.0f64, |m, k| m.max(indicator[k]));
+            let threshold = (opts.mark_fraction * opts.target).max(opts.max_fraction * worst);
+            mark(indicator, threshold, frozen)
+        }
     };
     let stop = stop.or((marked.is_empty()).then_some(StopReason::Singular));
     let budget = budget(opts, cfg, indicator.len(), f, marked.len());
