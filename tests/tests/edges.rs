@@ -236,40 +236,6 @@ fn study() {
     }
 }
 
-/// The rooms' edge values on meshes only the compressed operator holds
-/// (no estimate: at 61 440 unknowns its check rows would cost more than the
-/// solve): uniform levels 2..5 and graded levels 1..4, r = 1 (long: the
-/// L-shaped room at level 5 has 110 592 unknowns):
-///
-///     cargo test --release -p radcol-tests --test integration edges::study_compressed -- --ignored --nocapture
-#[test]
-#[ignore]
-fn study_compressed() {
-    let compressed = |c: SolveConfig| SolveConfig {
-        operator: radcol_core::run::OperatorChoice::Compressed,
-        estimate: false,
-        ..c
-    };
-    for scene in ["room", "lroom"] {
-        println!(
-            "{scene}: predicted edge exponent λ(0.75) = {:.3}",
-            edge_exponent(0.75)
-        );
-        let t = std::time::Instant::now();
-        let run = sequence(scene, (2..=5).map(|l| compressed(cfg(l))));
-        print(scene, "uniform levels 2..5, compressed", &run);
-        println!("  {:.0} s", t.elapsed().as_secs_f64());
-        let t = std::time::Instant::now();
-        let run = sequence(scene, (1..=4).map(|l| compressed(graded_cfg(l, 2.0, 1.0))));
-        print(
-            scene,
-            "graded q = 2 within 1 m, levels 1..4, compressed",
-            &run,
-        );
-        println!("  {:.0} s", t.elapsed().as_secs_f64());
-    }
-}
-
 /// A floor and a wall, unit squares meeting at a right angle along the y
 /// axis (open: the rest of space is black), both emitting 1 with ρ = 0.5.
 fn wedge() -> radcol_core::problem::Problem {

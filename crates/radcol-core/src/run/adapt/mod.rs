@@ -311,9 +311,7 @@ fn decide(
     let marked = match stop {
         Some(_) => Vec::new(),
         None => {
-            let worst = (0..indicator.len())
-                .filter(|&k| !frozen(k))
-                .fold(0.0f64, |m, k| m.max(indicator[k]));
+            let worst = splittable_max(indicator, frozen);
             let threshold = (opts.mark_fraction * opts.target).max(opts.max_fraction * worst);
             mark(indicator, threshold, frozen)
         }
@@ -350,10 +348,7 @@ fn describe(
         singular_elements: (0..indicator.len())
             .filter(|&k| frozen(k) && indicator[k] > threshold)
             .count(),
-        estimate_elsewhere: (0..indicator.len())
-            .filter(|&k| !frozen(k))
-            .map(|k| indicator[k])
-            .fold(0.0f64, f64::max),
+        estimate_elsewhere: splittable_max(indicator, frozen),
         seconds: 0.0,
     }
 }
@@ -383,6 +378,13 @@ fn worst(out: &SolveOutcome) -> (f64, f64) {
         .fold((0.0f64, 0.0f64), |(m, r), e| {
             (m.max(e.max_rel), r.max(e.rms_rel))
         })
+}
+
+/// The largest `indicator` of an element that is not `frozen` (0 if none).
+fn splittable_max(indicator: &[f64], frozen: &dyn Fn(usize) -> bool) -> f64 {
+    (0..indicator.len())
+        .filter(|&k| !frozen(k))
+        .fold(0.0f64, |m, k| m.max(indicator[k]))
 }
 
 /// The elements above `threshold` that may still be split (not `frozen`), worst first.
