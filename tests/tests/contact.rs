@@ -131,9 +131,9 @@ fn imprinted_contact_lines_lower_the_error() {
 /// target 5e-3 from level 1): the estimate fell to 8.7e-3 at 651 unknowns,
 /// stayed there for 15 steps while the same ~74 elements were split each
 /// time, then rose to 5e-2 at 11 910 unknowns (rounding). Now elements whose
-/// estimate stalls (or that reach the depth limit, here 4) are no longer
-/// split; the loop stops as `Singular`, the error away from them is below the
-/// target, and the points it names are the corners' feet.
+/// estimate stalls are no longer split; the loop stops as `Singular`, the
+/// error away from them is below the target, and the points it names are the
+/// corners' feet.
 #[test]
 fn adaptive_refinement_names_the_corners_where_it_stalls() {
     let cfg = SolveConfig {
@@ -144,7 +144,6 @@ fn adaptive_refinement_names_the_corners_where_it_stalls() {
     };
     let opts = AdaptOptions {
         target: 5e-3,
-        max_depth: 4,
         ..Default::default()
     };
     let res = solve_adaptive(&imprinted(), &cfg, &opts, &CpuBackend, |s| {
@@ -183,4 +182,52 @@ fn adaptive_refinement_names_the_corners_where_it_stalls() {
         .singular
         .windows(2)
         .all(|w| w[0].estimate >= w[1].estimate));
+}
+
+/// The size floor alone (no stall test): the loop grades towards the
+/// corners' feet until their elements are shorter than
+/// `AdaptOptions::min_size` of the scene's diagonal (the default, 1e-5), and
+/// the estimate does not rise on the way (rounding does not break the
+/// smallest elements: measured 8.51e-3, 8.76e-3 then falling to 8.65e-3 over
+/// 16 steps to 9 183 unknowns; without any limit it rose to 5e-2). The points named are
+/// the feet, every element there at the floor.
+#[test]
+fn the_size_floor_stops_the_loop_before_rounding_does() {
+    let cfg = SolveConfig {
+        degree: 1,
+        alpha: 1.0 / 6.0,
+        level: 1,
+        ..Default::default()
+    };
+    let opts = AdaptOptions {
+        target: 5e-3,
+        stall_generations: 0,
+        max_steps: 40,
+        ..Default::default()
+    };
+    let res = solve_adaptive(&imprinted(), &cfg, &opts, &CpuBackend, |_| {}).unwrap();
+    let last = res.steps.last().unwrap();
+    assert_eq!(res.stop, StopReason::Singular, "{last:?}");
+    // From the third step on the feet's elements lead, and their estimate
+    // stays where it stalled.
+    for s in &res.steps[2..] {
+        let ratio = s.estimate / last.estimate;
+        assert!((0.95..=1.05).contains(&ratio), "{:?}", res.steps);
+    }
+    assert!(last.estimate_elsewhere <= opts.target, "{last:?}");
+    let (lo, hi) = (1.37, 2.41);
+    let feet = [(lo, lo), (hi, lo), (hi, hi), (lo, hi)].map(|(x, y)| DVec3::new(x, y, 0.0));
+    assert_eq!(res.singular.len(), 4, "{:?}", res.singular);
+    for p in &res.singular {
+        let x = DVec3::from_array(p.position);
+        let to_foot = feet
+            .iter()
+            .map(|f| (*f - x).length())
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            to_foot <= p.radius.max(1e-4),
+            "{p:?} is {to_foot:.3e} from a corner's foot"
+        );
+        assert_eq!(p.smallest, p.elements, "{p:?}");
+    }
 }

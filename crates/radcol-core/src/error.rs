@@ -134,6 +134,12 @@ pub enum InputError {
         /// The target asked for.
         value: f64,
     },
+    /// An adaptive size floor outside [0, 1).
+    #[error("smallest element size {value} must lie in [0, 1): it is a fraction of the diagonal of the scene's bounding box")]
+    MinSize {
+        /// The floor asked for.
+        value: f64,
+    },
     /// A compression tolerance outside (0, 1).
     #[error("compression tolerance {value} must lie in (0, 1): it is the relative error of each compressed block (Frobenius)")]
     CompressionTolerance {

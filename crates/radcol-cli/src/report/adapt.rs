@@ -19,7 +19,8 @@ pub struct AdaptReport {
     /// Every step.
     steps: Vec<AdaptStep>,
     /// Where the estimate stayed above the target because refinement
-    /// stopped reducing it (largest first).
+    /// stopped reducing it or the elements reached the size floor (largest
+    /// first).
     singular_points: Vec<SingularPoint>,
 }
 
@@ -124,10 +125,15 @@ impl fmt::Display for AdaptReport {
             let [x, y, z] = p.position;
             writeln!(
                 f,
-                "  singular    ({x:.6}, {y:.6}, {z:.6}) within {:.3e}: {} element{}, estimate up to {}",
+                "  singular    ({x:.6}, {y:.6}, {z:.6}) within {:.3e}: {} element{}{}, estimate up to {}",
                 p.radius,
                 p.elements,
                 if p.elements == 1 { "" } else { "s" },
+                match p.smallest {
+                    0 => String::new(),
+                    n if n == p.elements => " (all at the smallest size split)".into(),
+                    n => format!(" ({n} at the smallest size split)"),
+                },
                 sci(p.estimate)
             )?;
         }

@@ -6,11 +6,12 @@
 //! element touching the point keeps its max error under every split: its
 //! child touching the point sees the same range of directions. Elsewhere a
 //! split divides the max error by about 2^(r+1) where u is smooth, and still
-//! by about 2 next to a concave edge (u ~ x log x). So an element whose
-//! estimate stayed above [`STALL_RATIO`] of its parent's for
+//! by about 2 next to a concave edge (u ~ x log x) or along a kink. So an
+//! element whose estimate stayed above [`STALL_RATIO`] of its parent's for
 //! `stall_generations` splits in a row is not split again (nor is one at the
-//! depth limit), and the elements left above the target that way are
-//! gathered into the [`SingularPoint`]s the report names.
+//! size floor, `AdaptOptions::min_size`), and the elements left above the
+//! target that way are gathered into the [`SingularPoint`]s the report
+//! names, with how many of them are at the floor.
 
 use crate::mesh::Mesh;
 use serde::Serialize;
@@ -19,12 +20,10 @@ use serde::Serialize;
 /// parent's (a smooth u gives 1/4 at r = 1, an x log x edge about 1/2).
 pub const STALL_RATIO: f64 = 0.7;
 
-/// Per element of the current mesh: depth beyond the starting mesh, the
-/// parent's estimate when it was split, and the run of stalled splits it
-/// inherited.
+/// Per element of the current mesh: the parent's estimate when it was
+/// split, and the run of stalled splits it inherited.
 #[derive(Clone, Debug)]
 pub(super) struct History {
-    depth: Vec<u32>,
     parent_estimate: Vec<f64>,
     inherited: Vec<u32>,
 }
@@ -33,7 +32,6 @@ impl History {
     /// The starting mesh of `n` elements.
     pub fn new(n: usize) -> Self {
         Self {
-            depth: vec![0; n],
             parent_estimate: vec![f64::NAN; n],
             inherited: vec![0; n],
         }
@@ -57,10 +55,10 @@ impl History {
             .collect()
     }
 
-    /// Whether element k is no longer split: at `max_depth`, or its
-    /// estimate stalled `stall_generations` times in a row (0: never).
-    pub fn frozen(&self, k: usize, stalls: &[u32], max_depth: u32, stall_generations: u32) -> bool {
-        self.depth[k] >= max_depth || (stall_generations > 0 && stalls[k] >= stall_generations)
+    /// Whether element k is no longer split: its estimate stalled
+    /// `stall_generations` times in a row (0: never), given `stalls`.
+    pub fn stalled(k: usize, stalls: &[u32], stall_generations: u32) -> bool {
+        stall_generations > 0 && stalls[k] >= stall_generations
     }
 
     /// The history of the refined mesh whose element i came from `parents[i]`
@@ -76,11 +74,9 @@ impl History {
         let mut next = Self::new(parents.len());
         for (i, &p) in parents.iter().enumerate() {
             if split[p] {
-                next.depth[i] = self.depth[p] + 1;
                 next.parent_estimate[i] = indicator[p];
                 next.inherited[i] = stalls[p];
             } else {
-                next.depth[i] = self.depth[p];
                 next.parent_estimate[i] = self.parent_estimate[p];
                 next.inherited[i] = self.inherited[p];
             }
@@ -98,14 +94,24 @@ pub struct SingularPoint {
     pub radius: f64,
     /// How many elements.
     pub elements: usize,
+    /// How many of them are at the size floor rather than stalled (there
+    /// the error may still fall under refinement: a kink along a line
+    /// halves it per split; lower `AdaptOptions::min_size` to go on).
+    pub smallest: usize,
     /// Their largest estimate (relative to max |u_n|, worst channel).
     pub estimate: f64,
 }
 
 /// The elements `left` (above the target, not split any more) of `mesh`,
 /// gathered into neighbourhoods: elements whose bounding balls touch belong
-/// to one; largest estimate first.
-pub fn singular_points(mesh: &Mesh, left: &[usize], indicator: &[f64]) -> Vec<SingularPoint> {
+/// to one; largest estimate first. `smallest(k)`: element k is at the size
+/// floor.
+pub fn singular_points(
+    mesh: &Mesh,
+    left: &[usize],
+    indicator: &[f64],
+    smallest: &dyn Fn(usize) -> bool,
+) -> Vec<SingularPoint> {
     let balls: Vec<_> = left.iter().map(|&k| mesh.bounding_ball(k)).collect();
     // Union-find over touching balls (a few hundred elements at most: the
     // quadratic pass costs nothing next to a solve).
@@ -144,6 +150,7 @@ pub fn singular_points(mesh: &Mesh, left: &[usize], indicator: &[f64]) -> Vec<Si
                 position: centre.to_array(),
                 radius,
                 elements: members.len(),
+                smallest: members.iter().filter(|&&i| smallest(left[i])).count(),
                 estimate: members
                     .iter()
                     .map(|&i| indicator[left[i]])
@@ -183,8 +190,8 @@ mod tests {
         let ind2 = [0.8, 0.1, 0.1, 0.1, 0.2, 0.2, 0.2, 1.0];
         let s2 = h.stalls(&ind2);
         assert_eq!(s2[0], 2);
-        assert!(h.frozen(0, &s2, 10, 2) && !h.frozen(0, &s2, 10, 3));
-        assert!(h.frozen(0, &s2, 2, 0) && !h.frozen(1, &s2, 10, 2));
+        assert!(History::stalled(0, &s2, 2) && !History::stalled(0, &s2, 3));
+        assert!(!History::stalled(0, &s2, 0) && !History::stalled(1, &s2, 2));
         // A split that lowers the estimate resets the run.
         assert_eq!(h.stalls(&[0.5, 0.1, 0.1, 0.1, 0.2, 0.2, 0.2, 1.0])[0], 0);
     }
@@ -197,9 +204,10 @@ mod tests {
         // neighbours in the refinement order) and one on another wall.
         let far = mesh.len() - 1;
         let ind: Vec<f64> = (0..mesh.len()).map(|k| k as f64).collect();
-        let pts = singular_points(&mesh, &[0, 1, far], &ind);
+        let pts = singular_points(&mesh, &[0, 1, far], &ind, &|k| k == 1);
         assert_eq!(pts.len(), 2, "{pts:?}");
-        assert_eq!(pts[0].elements, 1);
+        assert_eq!((pts[0].elements, pts[0].smallest), (1, 0));
+        assert_eq!((pts[1].elements, pts[1].smallest), (2, 1));
         assert_eq!(pts[0].estimate, far as f64);
         assert_eq!(pts[1].elements, 2);
         let (c, r) = mesh.bounding_ball(far);

@@ -1,0 +1,73 @@
+//! The adaptive loop's parts: splitting, marking, budget, options.
+
+use super::*;
+use crate::geometry::shapes::box_room;
+
+/// Splitting keeps area, counts and the parent map, and children follow
+/// their parent's place.
+#[test]
+fn refine_splits_in_place() {
+    let mesh = Mesh::new(Arc::new(box_room(1.0, 2.0, 1.5)), 1);
+    let (refined, parents) = refine(&mesh, &[3, 0, 40]);
+    assert_eq!(refined.len(), mesh.len() + 9);
+    crate::assert_close!(refined.area(), mesh.area(), 1e-12 * mesh.area());
+    assert_eq!(&parents[..5], &[0, 0, 0, 0, 1]);
+    assert_eq!(parents.iter().filter(|&&p| p == 40).count(), 4);
+    for (k, &p) in parents.iter().enumerate() {
+        let c = refined.position(k, 1.0 / 3.0, 1.0 / 3.0);
+        assert!(mesh.locate(c).is_some_and(|(q, _)| q == p));
+    }
+}
+
+/// Marking takes the elements above the threshold, worst first, except
+/// those no longer split.
+#[test]
+fn marking_skips_capped_elements() {
+    let ind = [0.1, 0.5, 0.01, 0.3, 0.2];
+    assert_eq!(mark(&ind, 0.15, &|_| false), vec![1, 3, 4]);
+    assert_eq!(mark(&ind, 0.15, &|k| k == 1), vec![3, 4]);
+    assert!(mark(&ind, 0.15, &|_| true).is_empty());
+}
+
+/// Targets outside (0, 1) and size floors outside [0, 1) are refused.
+#[test]
+fn options_out_of_range_are_refused() {
+    let ok = AdaptOptions::default();
+    assert!(ok.check().is_ok());
+    for target in [0.0, 1.0, -1e-3, f64::NAN] {
+        let o = AdaptOptions {
+            target,
+            ..ok.clone()
+        };
+        assert!(matches!(o.check(), Err(InputError::TargetError { .. })));
+    }
+    for min_size in [-1e-9, 1.0, f64::NAN] {
+        let o = AdaptOptions {
+            min_size,
+            ..ok.clone()
+        };
+        assert!(matches!(o.check(), Err(InputError::MinSize { .. })));
+    }
+    assert!(AdaptOptions {
+        min_size: 0.0,
+        ..ok
+    }
+    .check()
+    .is_ok());
+}
+
+/// The budget splits the worst elements that fit, and says why none fit.
+#[test]
+fn budget_caps_the_split() {
+    let cfg = SolveConfig {
+        check_memory: false,
+        ..Default::default()
+    };
+    let opts = AdaptOptions {
+        max_unknowns: Some(3 * (10 + 3 * 4)),
+        ..Default::default()
+    };
+    assert_eq!(budget(&opts, &cfg, 10, 3, 2), Ok(2));
+    assert_eq!(budget(&opts, &cfg, 10, 3, 9), Ok(4));
+    assert_eq!(budget(&opts, &cfg, 22, 3, 9), Err(StopReason::MaxUnknowns));
+}
