@@ -110,6 +110,12 @@ fn sequence(scene: &str, cfgs: impl Iterator<Item = SolveConfig>) -> Run {
     let problem = builtin(scene).unwrap().unwrap().problem();
     cfgs.map(|c| {
         let out = solve(&problem, &c, &CpuBackend).unwrap();
+        println!(
+            "  {scene}: {} unknowns, {:.1} s, {:?} operator",
+            out.discretization.len(),
+            out.timings.total_s,
+            out.operator.kind()
+        );
         let v = probes(scene)
             .iter()
             .map(|&(_, x, n)| value_on_face(&out, x, n))
@@ -233,6 +239,24 @@ fn study() {
             "adaptive 1e-2 .. 3e-4",
             &adaptive(scene, &[1e-2, 3e-3, 1e-3, 3e-4]),
         );
+    }
+}
+
+/// Uniform refinement of both rooms two levels beyond what the dense
+/// matrix allowed (levels 4 and 5 are compressed: 61 440 and 110 592
+/// unknowns at level 5), to see the edge values' differences reach their
+/// asymptotic order λ ≈ 0.65 (long: tens of minutes on 2 cores):
+///
+///     cargo test --release -p radcol-tests --test integration edges::rooms_deeper -- --ignored --nocapture
+#[test]
+#[ignore]
+fn rooms_deeper() {
+    println!(
+        "predicted edge exponent λ(0.75) = {:.3}",
+        edge_exponent(0.75)
+    );
+    for scene in ["room", "lroom"] {
+        print(scene, "uniform levels 0..5", &uniform(scene, 0..=5));
     }
 }
 

@@ -13,6 +13,7 @@ mod discontinuity;
 mod edges;
 mod ellipsoid_orders;
 mod estimate;
+mod gltf_input;
 mod gpu_conformance;
 mod gpu_select;
 mod gpu_solve;

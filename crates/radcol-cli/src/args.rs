@@ -6,8 +6,10 @@ use std::path::PathBuf;
 
 const SCENES: &str = "sphere (unit sphere), sphere:R, ellipsoid:A,B,C, box:LX,LY,LZ \
 (the room [0,LX]x[0,LY]x[0,LZ]); the built-in triangle scenes cornell (the Cornell box), \
-room (an empty lit room), lroom (an L-shaped room lit in one leg), shadow (a floor under a light and a floating occluder) and plates (two facing squares); or FILE.obj with its MTL materials \
-(Kd = reflectance ρ, Ke = emission E, per colour channel R, G, B)";
+room (an empty lit room), lroom (an L-shaped room lit in one leg), shadow (a floor under a light and a floating occluder) and plates (two facing squares); FILE.obj with its MTL materials \
+(Kd = reflectance ρ, Ke = emission E, per colour channel R, G, B); or FILE.gltf / FILE.glb \
+(glTF 2.0: baseColorFactor = ρ, emissiveFactor × KHR_materials_emissive_strength = E, node \
+transforms applied, metres kept, the first perspective camera used)";
 
 const EXPRESSIONS: &str =
     "Expressions (--rho, --emission, --exact): numbers (2, 0.5, 1e-3), x, y, z, \

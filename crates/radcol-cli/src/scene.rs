@@ -2,13 +2,13 @@
 
 use crate::error::{bad_input, BadInput};
 use radcol_core::geometry::{shapes, Surface};
-use radcol_core::scene::{builtin, load_obj, Scene, BUILTIN_SCENES};
+use radcol_core::scene::{builtin, load_gltf, load_obj, Scene, BUILTIN_SCENES};
 use std::path::PathBuf;
 use std::sync::Arc;
 
 /// The forms a SCENE argument may take, for error messages.
 pub const VALID_FORMS: &str = "sphere, sphere:R, ellipsoid:A,B,C, box:LX,LY,LZ, \
-the built-in scenes cornell, room, lroom, shadow, plates, or FILE.obj";
+the built-in scenes cornell, room, lroom, shadow, plates, FILE.obj, or FILE.gltf/FILE.glb";
 
 /// A parsed SCENE argument.
 #[derive(Clone, Debug, PartialEq)]
@@ -23,6 +23,8 @@ pub enum SceneSpec {
     Builtin(String),
     /// An OBJ file.
     Obj(PathBuf),
+    /// A glTF 2.0 file (`.gltf` or `.glb`).
+    Gltf(PathBuf),
 }
 
 /// What a SCENE argument loads to: a bare surface (ρ and E from the command
@@ -55,11 +57,15 @@ impl Loaded {
 
 impl SceneSpec {
     /// Parses `sphere`, `sphere:R`, `ellipsoid:A,B,C`, `box:LX,LY,LZ`, a
-    /// built-in scene name, or a path ending in `.obj`.
+    /// built-in scene name, or a path ending in `.obj`, `.gltf` or `.glb`.
     pub fn parse(text: &str) -> Result<Self, BadInput> {
         let text = text.trim();
-        if text.to_ascii_lowercase().ends_with(".obj") {
+        let lower = text.to_ascii_lowercase();
+        if lower.ends_with(".obj") {
             return Ok(SceneSpec::Obj(PathBuf::from(text)));
+        }
+        if lower.ends_with(".gltf") || lower.ends_with(".glb") {
+            return Ok(SceneSpec::Gltf(PathBuf::from(text)));
         }
         if let Some((name, _)) = BUILTIN_SCENES
             .iter()
@@ -96,10 +102,14 @@ impl SceneSpec {
 
     /// True for scenes whose materials give ρ and E.
     pub fn has_materials(&self) -> bool {
-        matches!(self, SceneSpec::Builtin(_) | SceneSpec::Obj(_))
+        matches!(
+            self,
+            SceneSpec::Builtin(_) | SceneSpec::Obj(_) | SceneSpec::Gltf(_)
+        )
     }
 
-    /// Builds or reads the scene. OBJ errors (file, line, value) are bad input.
+    /// Builds or reads the scene. OBJ and glTF errors (file, line or mesh,
+    /// value) are bad input.
     pub fn load(&self) -> Result<Loaded, BadInput> {
         let scene = match *self {
             SceneSpec::Sphere(r) => return Ok(Loaded::Surface(Arc::new(shapes::sphere(r)))),
@@ -113,6 +123,7 @@ impl SceneSpec {
                 builtin(name).expect("parse accepts only built-in names")
             }
             SceneSpec::Obj(ref path) => load_obj(path),
+            SceneSpec::Gltf(ref path) => load_gltf(path),
         };
         scene
             .map(|s| Loaded::Scene(Arc::new(s)))

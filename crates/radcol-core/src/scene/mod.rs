@@ -29,6 +29,7 @@
 
 mod builder;
 mod builtin;
+mod gltf;
 pub mod imprint;
 mod obj;
 mod overlap;
@@ -38,6 +39,7 @@ mod validate;
 
 pub use builder::SceneBuilder;
 pub use builtin::{builtin, BUILTIN_SCENES};
+pub use gltf::load_gltf;
 pub use imprint::Imprinted;
 pub use obj::{load_obj, load_obj_str};
 
@@ -102,6 +104,14 @@ pub enum SceneError {
         /// The file.
         path: PathBuf,
         /// The system's reason.
+        message: String,
+    },
+    /// A glTF file (or one of its buffers) could not be read or parsed.
+    #[error("cannot read glTF file {}: {message}", path.display())]
+    Gltf {
+        /// The file.
+        path: PathBuf,
+        /// The reason (the system's or the glTF reader's).
         message: String,
     },
     /// A `mtllib` file is missing or unreadable.
