@@ -250,7 +250,10 @@ fn study() {
 ///
 ///     cargo test --release -p radcol-tests --test integration edges::deeper_ -- --ignored --nocapture
 fn deeper(scene: &str) {
-    println!("predicted edge exponent λ(0.75) = {:.3}", edge_exponent(0.75));
+    println!(
+        "predicted edge exponent λ(0.75) = {:.3}",
+        edge_exponent(0.75)
+    );
     print(scene, "uniform levels 0..5", &uniform(scene, 0..=5));
 }
 

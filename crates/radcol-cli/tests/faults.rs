@@ -831,6 +831,24 @@ fn obj_cases() -> Vec<Case> {
             ),
         ],
     ));
+    // A light over a wall and a floor wound clockwise (facing down): each
+    // floor triangle is named, instead of an almost black image with no warning.
+    cases.push(with_files(
+        case(
+            "floor wound the wrong way",
+            &solve,
+            Warned(&["s.obj:15 (group 'floor')", "faces no other surface", "wound the wrong way"]),
+        ),
+        vec![
+            ("w.mtl", format!("{WHITE}newmtl grey\nKd 0.5 0.5 0.5\n").into_bytes()),
+            (
+                "s.obj",
+                "mtllib w.mtl\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n\
+                 g light\nusemtl white\nf 1 4 3 2\ng floor\nusemtl grey\nf 5 8 7 6\ng wall\nf 5 8 4 1\n"
+                    .into(),
+            ),
+        ],
+    ));
     // The L from every corner: ear clipping covers exactly its area 3 (a fan
     // from 4 of the 6 corners flipped a triangle over the notch).
     for start in 0..6 {

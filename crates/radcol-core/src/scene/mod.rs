@@ -29,7 +29,9 @@
 
 mod builder;
 mod builtin;
+mod facing;
 mod gltf;
+mod ignored;
 pub mod imprint;
 mod obj;
 mod overlap;

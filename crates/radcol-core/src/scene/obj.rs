@@ -133,6 +133,7 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
     let mut faces: Vec<ScanFace> = Vec::new();
     let mut warnings = Vec::new();
     let mut skipped: Vec<usize> = Vec::new();
+    let mut ignored = super::ignored::Ignored::default();
     // What tobj reads: the same lines, trimmed, with l/p statements blanked so
     // that line-for-line structure is kept.
     let mut for_tobj = String::with_capacity(text.len());
@@ -176,7 +177,8 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
             "mtllib" => {
                 let lib = rest(line, keyword);
                 let first = materials.len();
-                let mtl_text = read_mtllib(lib, resolve, &at(line_no), &mut materials)?;
+                let mtl_text =
+                    read_mtllib(lib, resolve, &at(line_no), &mut materials, &mut warnings)?;
                 for (m, mat) in materials.iter().enumerate().skip(first) {
                     by_name.insert(mat.name.clone(), m);
                 }
@@ -194,7 +196,9 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
                     }
                 }
             }
-            _ => {}
+            "" => {}
+            k if k.starts_with('#') => {}
+            k => ignored.note(k, line_no),
         }
         if pass {
             for_tobj.push_str(line);
@@ -207,6 +211,7 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
             at(*first)
         ));
     }
+    warnings.extend(ignored.warnings(file));
 
     let (scan, w) = ((&faces[..], &positions[..], &materials[..]), &mut warnings);
     let triangles = super::tobj_match::match_tobj(file, &for_tobj, &libs, scan, w)?;
@@ -227,6 +232,7 @@ fn read_mtllib(
     resolve: &Resolver,
     at: &str,
     materials: &mut Vec<Material>,
+    warnings: &mut Vec<String>,
 ) -> Result<String, SceneError> {
     if lib.is_empty() {
         return Err(syntax(at.to_string(), "mtllib without a file name"));
@@ -236,7 +242,7 @@ fn read_mtllib(
         mtl,
         message,
     })?;
-    materials.extend(parse_mtl(&label, &mtl_text)?);
+    materials.extend(parse_mtl(&label, &mtl_text, warnings)?);
     Ok(mtl_text)
 }
 
@@ -362,8 +368,13 @@ fn non_planarity(p: &[DVec3]) -> Option<f64> {
 }
 
 /// Parses an MTL text: every material needs `Kd` (three numbers in [0, 1));
-/// `Ke` (three numbers ≥ 0) defaults to 0.
-fn parse_mtl(file: &str, text: &str) -> Result<Vec<Material>, SceneError> {
+/// `Ke` (three numbers ≥ 0) defaults to 0; other statements are tallied
+/// into one warning per kind.
+fn parse_mtl(
+    file: &str,
+    text: &str,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<Material>, SceneError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     struct Pending {
         name: String,
@@ -403,6 +414,7 @@ fn parse_mtl(file: &str, text: &str) -> Result<Vec<Material>, SceneError> {
     };
     let mut out = Vec::new();
     let mut current: Option<Pending> = None;
+    let mut ignored = super::ignored::Ignored::default();
     for (i, raw) in text.lines().enumerate() {
         let line_no = i + 1;
         let line = raw.trim();
@@ -444,12 +456,15 @@ fn parse_mtl(file: &str, text: &str) -> Result<Vec<Material>, SceneError> {
                 match keyword {
                     "Kd" => p.kd = Some((v, line_no)),
                     "Ke" => p.ke = Some((v, line_no)),
-                    _ => {}
+                    k => ignored.note(k, line_no),
                 }
             }
-            _ => {}
+            "" => {}
+            k if k.starts_with('#') => {}
+            k => ignored.note(k, line_no),
         }
     }
+    warnings.extend(ignored.warnings(file));
     if let Some(p) = current.take() {
         out.push(close(p)?);
     }

@@ -45,10 +45,22 @@ fn square(extra: &str) -> String {
     format!("mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\ng floor\nusemtl white\nf 1 2 3\nf 1 3 4\n{extra}")
 }
 
+/// `s` without the warning that no two of its triangles face each other,
+/// which a lone square (most scenes here) must carry as its last warning.
+fn alone(mut s: Scene) -> Scene {
+    assert_eq!(
+        s.warnings.pop().as_deref(),
+        Some(super::facing::NOTHING_FACES),
+        "{:?}",
+        s.warnings
+    );
+    s
+}
+
 #[test]
 fn loads_a_square_with_materials() {
     let (path, r) = load(&square(""), MTL);
-    let s = r.unwrap();
+    let s = alone(r.unwrap());
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     assert_eq!(s.source.as_deref(), Some(path.as_path()));
     assert_eq!(s.name, "t");
@@ -199,7 +211,7 @@ fn repairs_and_warnings_name_lines() {
     let f = |p: &Path| p.display().to_string();
     // A repeated vertex and a collinear triangle: dropped.
     let (p, r) = load(&square("v 2 0 0\nf 1 2 5\nf 1 1 2\n"), MTL);
-    let s = r.unwrap();
+    let s = alone(r.unwrap());
     assert_eq!(s.triangle_count(), 2);
     assert!(
         s.warnings[0].starts_with(&format!("{}:11: degenerate", f(&p))),
@@ -214,7 +226,7 @@ fn repairs_and_warnings_name_lines() {
     assert_eq!(s.warnings.len(), 2);
     // The same triangle rotated (same orientation): dropped.
     let (p, r) = load(&square("f 2 3 1\n"), MTL);
-    let s = r.unwrap();
+    let s = alone(r.unwrap());
     assert_eq!(s.triangle_count(), 2);
     assert!(s.warnings[0].contains(&format!(
         "{}:10: duplicate of the triangle at {}:8",
@@ -223,7 +235,7 @@ fn repairs_and_warnings_name_lines() {
     )));
     // Opposite orientation: a two-sided panel, kept without a warning.
     let (_, r) = load(&square("usemtl lamp\nf 1 3 2\nf 1 4 3\n"), MTL);
-    let s = r.unwrap();
+    let s = alone(r.unwrap());
     assert_eq!(s.triangle_count(), 4);
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     // Non-planar quad.
@@ -231,7 +243,7 @@ fn repairs_and_warnings_name_lines() {
         &square("v 0 0 1\nv 1 0 1\nv 1 1 1.5\nv 0 1 1\nf 5 6 7 8\n"),
         MTL,
     );
-    let s = r.unwrap();
+    let s = alone(r.unwrap());
     assert_eq!(s.triangle_count(), 4);
     assert!(
         s.warnings.iter().any(|w| w.starts_with(&format!(
@@ -243,7 +255,7 @@ fn repairs_and_warnings_name_lines() {
     );
     // Polylines are skipped.
     let (p, r) = load(&square("l 1 2 3\n"), MTL);
-    let s = r.unwrap();
+    let s = alone(r.unwrap());
     assert_eq!(s.triangle_count(), 2);
     assert!(
         s.warnings[0].starts_with(&format!("{}:10: 1 polyline", f(&p))),
@@ -257,7 +269,7 @@ fn t_junctions_and_non_manifold_edges_warn() {
     let f = |p: &Path| p.display().to_string();
     // A triangle whose vertex 5 = (0.5, 0, 0) lies inside the edge 1-2 of line 8.
     let (p, r) = load(&square("v 0.5 0 0\nv 0.5 -1 0\nf 5 6 2\n"), MTL);
-    let s = r.unwrap();
+    let s = alone(r.unwrap());
     assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
     let w = &s.warnings[0];
     assert!(
@@ -267,9 +279,16 @@ fn t_junctions_and_non_manifold_edges_warn() {
         "{w}"
     );
     // A fin on the diagonal 1-3: three triangles share it.
+    // The fin faces the triangle of line 8 only: the one of line 9 faces
+    // nothing and is named.
     let (p, r) = load(&square("v 0 0 1\nf 1 3 5\n"), MTL);
     let s = r.unwrap();
-    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+    assert_eq!(s.warnings.len(), 2, "{:?}", s.warnings);
+    assert!(
+        s.warnings[1].starts_with(&format!("{}:9 (group 'floor'): its front", f(&p))),
+        "{:?}",
+        s.warnings
+    );
     let w = &s.warnings[0];
     assert!(
         w.contains("non-manifold") && w.contains("3 triangles"),
@@ -645,10 +664,87 @@ fn warnings_are_capped() {
     let p = [DVec3::ZERO, DVec3::X, DVec3::Y];
     let tris: Vec<[u32; 3]> = std::iter::repeat_n([0, 1, 2], MAX_WARNINGS_PER_KIND + 6).collect();
     b.add_mesh_f64("g", &p, &tris, white).unwrap();
-    let s = b.build().unwrap();
+    let s = alone(b.build().unwrap());
     assert_eq!(s.warnings.len(), MAX_WARNINGS_PER_KIND + 1);
     assert_eq!(
         s.warnings.last().unwrap(),
         "... and 5 more duplicate-triangle warnings"
     );
+}
+
+/// A closed box with its floor wound the wrong way: each floor triangle is
+/// named; an emitter facing out of the box gets the emitter's message; the
+/// box as it should be has no warning.
+#[test]
+fn triangles_facing_nothing_are_named() {
+    // The unit cube's faces, counter-clockwise seen from inside.
+    let faces = [
+        "f 1 2 3 4", // floor z = 0, facing +z
+        "f 5 8 7 6", // ceiling z = 1, facing -z
+        "f 1 5 6 2", // y = 0, facing +y
+        "f 4 3 7 8", // y = 1, facing -y
+        "f 1 4 8 5", // x = 0, facing +x
+        "f 2 6 7 3", // x = 1, facing -x
+    ];
+    let obj = |floor: &str, ceiling: &str| {
+        let mut t = String::from("mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n");
+        t += &format!("g floor\nusemtl white\n{floor}\ng ceiling\nusemtl lamp\n{ceiling}\ng walls\nusemtl white\n");
+        for f in &faces[2..] {
+            t += f;
+            t += "\n";
+        }
+        t
+    };
+    let (_, r) = load(&obj(faces[0], faces[1]), MTL);
+    let s = r.unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+
+    let (p, r) = load(&obj("f 4 3 2 1", faces[1]), MTL);
+    let s = r.unwrap();
+    let f = p.display().to_string();
+    assert_eq!(s.warnings.len(), 2, "{:?}", s.warnings);
+    for w in &s.warnings {
+        assert!(
+            w.starts_with(&format!(
+                "{f}:12 (group 'floor'): its front (counter-clockwise) side faces no other surface"
+            )) && w.ends_with("is it wound the wrong way?"),
+            "{w}"
+        );
+    }
+
+    let (_, r) = load(&obj(faces[0], "f 5 6 7 8"), MTL);
+    let s = r.unwrap();
+    assert_eq!(s.warnings.len(), 2, "{:?}", s.warnings);
+    assert!(
+        s.warnings
+            .iter()
+            .all(|w| w.contains("(group 'ceiling'): emitter: its front")),
+        "{:?}",
+        s.warnings
+    );
+}
+
+/// OBJ and MTL statements radcol does not read are warned about once per
+/// kind, with the count and the first line.
+#[test]
+fn ignored_statements_are_warned_once_per_kind() {
+    let mtl = "newmtl white\nKd 0.5 0.5 0.5\nNs 10\nmap_Kd wood.png\nNs 20\n";
+    let (p, r) = load(&square("vt 0 0\nvt 1 0\ns 1\n"), mtl);
+    let s = alone(r.unwrap());
+    let obj = p.display().to_string();
+    let mtl = p.with_file_name("t.mtl").display().to_string();
+    let want = [
+        format!("{mtl}:4: 1 'map_Kd' statement ignored: a texture map"),
+        format!("{mtl}:3: 2 'Ns' statements ignored: not a diffuse property"),
+        format!("{obj}:12: 1 's' statement ignored: smoothing groups"),
+        format!("{obj}:10: 2 'vt' statements ignored: texture coordinates"),
+    ];
+    assert_eq!(s.warnings.len(), want.len(), "{:?}", s.warnings);
+    for w in want {
+        assert!(
+            s.warnings.iter().any(|s| s.starts_with(&w)),
+            "{w} in {:?}",
+            s.warnings
+        );
+    }
 }

@@ -154,6 +154,7 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
         }
     }
     t_junctions(&tris, &kept, scale, &mut warnings);
+    super::facing::facing_nothing(&tris, &kept, &materials, scale, &mut warnings);
     let (kept, imprinted) = super::imprint::contact_lines(kept, scale);
 
     let (patches, patch_material) = patches_by_group(&kept, &materials);
