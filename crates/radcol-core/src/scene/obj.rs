@@ -147,22 +147,16 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
         match keyword {
             "v" => positions.push(parse_vertex(line, words, &at(line_no))?),
             "f" => {
-                let vertices = parse_face(words, &positions, &at(line_no))?;
-                let Some(material) = material else {
-                    return Err(SceneError::NoMaterial {
-                        at: at(line_no),
-                        message: "no usemtl statement before it".into(),
-                    });
-                };
-                if let Some(w) = planarity_warning(&vertices, &positions, &at(line_no)) {
-                    warnings.push(w);
-                }
-                faces.push(ScanFace {
-                    line: line_no,
-                    group: group.clone(),
+                let (at, group) = (&at(line_no), group.clone());
+                faces.push(scan_face(
+                    words,
+                    at,
+                    line_no,
+                    group,
                     material,
-                    vertices,
-                });
+                    &positions,
+                    &mut warnings,
+                )?);
             }
             "l" | "p" => {
                 skipped.push(line_no);
@@ -222,6 +216,35 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
         camera: None,
         warnings,
         source: None,
+    })
+}
+
+/// The face statement at `line_no` (`at`) with the vertex `words`, in
+/// `group` with the current `material`; a non-planar polygon is warned about.
+fn scan_face<'a>(
+    words: impl Iterator<Item = &'a str>,
+    at: &str,
+    line_no: usize,
+    group: String,
+    material: Option<usize>,
+    positions: &[DVec3],
+    warnings: &mut Vec<String>,
+) -> Result<ScanFace, SceneError> {
+    let vertices = parse_face(words, positions, at)?;
+    let Some(material) = material else {
+        return Err(SceneError::NoMaterial {
+            at: at.to_string(),
+            message: "no usemtl statement before it".into(),
+        });
+    };
+    if let Some(w) = planarity_warning(&vertices, positions, at) {
+        warnings.push(w);
+    }
+    Ok(ScanFace {
+        line: line_no,
+        group,
+        material,
+        vertices,
     })
 }
 
