@@ -20,6 +20,7 @@ mod args;
 mod error;
 mod export;
 mod output;
+mod panics;
 mod plot;
 mod progress;
 mod report;
@@ -35,21 +36,14 @@ use std::process::ExitCode;
 
 fn main() -> ExitCode {
     ensure_runtime_dir();
-    // A panic is a bug, but the user still gets one line and an exit code, not
-    // a backtrace: the hook stays silent and the payload is reported below.
-    std::panic::set_hook(Box::new(|_| {}));
+    // A panic is a bug, but the user still gets one line and an exit code
+    // (and Rust's backtrace first when RUST_BACKTRACE asks for it).
+    panics::install();
     let outcome = std::panic::catch_unwind(try_main);
     let err = match outcome {
         Ok(Ok(())) => return ExitCode::SUCCESS,
         Ok(Err(err)) => err,
-        Err(payload) => {
-            let msg = payload
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown cause".into());
-            anyhow::anyhow!("internal error (please report): {msg}")
-        }
+        Err(payload) => anyhow::anyhow!(panics::message(payload.as_ref())),
     };
     if error::is_broken_pipe(&err) {
         return ExitCode::SUCCESS;
