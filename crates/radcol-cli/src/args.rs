@@ -331,9 +331,15 @@ pub struct SolveArgs {
     #[arg(long, value_name = "PX", default_value_t = 480)]
     pub height: u32,
 
-    /// Rays per pixel axis (N² rays per pixel, on a regular grid).
-    #[arg(long, value_name = "N", default_value_t = 2)]
-    pub samples: u32,
+    /// Rays (samples) per pixel: a square count on a regular grid, any other
+    /// on a low-discrepancy set [default: 4]
+    #[arg(long, value_name = "N", conflicts_with = "samples")]
+    pub spp: Option<u32>,
+
+    /// Rays per pixel axis, kept with its old meaning: N² rays per pixel on a
+    /// regular grid, the same as --spp N²
+    #[arg(long, value_name = "N")]
+    pub samples: Option<u32>,
 
     /// Exposure for 8-bit outputs: `auto` (the 99th luminance percentile maps to white),
     /// `auto+S` / `auto-S` (auto, then S stops brighter/darker), or S stops applied to the

@@ -42,8 +42,8 @@ pub fn write_all(
         if o.kind.is_image() && image.is_none() {
             if let Some(b) = bar {
                 b.spin(format!(
-                    "rendering {}×{} ({}² rays per pixel)",
-                    look.render.width, look.render.height, look.render.samples
+                    "rendering {}×{} ({} rays per pixel)",
+                    look.render.width, look.render.height, look.render.samples_per_pixel
                 ));
             }
             let camera = look.camera.unwrap_or_else(|| render::auto_camera(mesh));

@@ -1581,3 +1581,38 @@ fn glb_scenes_solve_like_their_obj() {
         &["plates.glb", "mesh 'bottom'", "no material"],
     );
 }
+
+/// --spp counts rays per pixel: --spp 4 is --samples 2 (2² on the grid)
+/// to the byte; a count that is not a square renders too (on the
+/// low-discrepancy set) and differs; zero and both flags at once are
+/// refused with one line.
+#[test]
+fn spp_counts_rays_per_pixel() {
+    let dir = scratch("spp");
+    let exr = |name: &str, look: &[&str]| {
+        let path = dir.join(name);
+        let mut args = vec!["solve", "cornell", "--level", "0", "--backend", "cpu"];
+        args.extend(["--width", "40", "--height", "30", "-q"]);
+        args.extend(look);
+        args.extend(["-o", path.to_str().unwrap()]);
+        radcol_ok(&args);
+        std::fs::read(&path).unwrap()
+    };
+    let spp4 = exr("spp4.exr", &["--spp", "4"]);
+    let samples2 = exr("samples2.exr", &["--samples", "2"]);
+    let default = exr("default.exr", &[]);
+    let spp5 = exr("spp5.exr", &["--spp", "5"]);
+    assert!(spp4 == samples2, "--spp 4 and --samples 2 differ");
+    assert!(spp4 == default, "the default is not 4 rays per pixel");
+    assert!(spp5 != spp4, "--spp 5 rendered the 4-ray image");
+    assert_one_line_error(
+        &["solve", "cornell", "--spp", "0"],
+        2,
+        &["--spp", "at least 1"],
+    );
+    assert_one_line_error(
+        &["solve", "cornell", "--spp", "4", "--samples", "2"],
+        2,
+        &["--spp", "--samples"],
+    );
+}

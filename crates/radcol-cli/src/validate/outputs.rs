@@ -155,20 +155,26 @@ pub(super) fn look(a: &SolveArgs) -> Result<LookSpec, BadInput> {
             })
         })
         .transpose()?;
+    // --samples N keeps its meaning: N² rays on the grid, as --spp N².
+    let (rays, rays_flag) = match (a.spp, a.samples) {
+        (Some(s), _) => (s as u64, "--spp"),
+        (None, Some(n)) => ((n as u64).saturating_mul(n as u64), "--samples"),
+        (None, None) => (RenderOptions::default().samples_per_pixel as u64, "--spp"),
+    };
     for (flag, v) in [
-        ("--width", a.width),
-        ("--height", a.height),
-        ("--samples", a.samples),
+        ("--width", a.width as u64),
+        ("--height", a.height as u64),
+        (rays_flag, rays),
     ] {
         if v == 0 {
             return Err(bad_input(format!("{flag} must be at least 1")));
         }
     }
-    let pixels = a.width as u64 * a.height as u64 * (a.samples as u64).pow(2);
+    let pixels = (a.width as u64 * a.height as u64).saturating_mul(rays);
     if pixels > 1 << 30 {
         return Err(bad_input(format!(
-            "--width {} --height {} --samples {}: {pixels} rays is more than radcol renders (2^30)",
-            a.width, a.height, a.samples
+            "--width {} --height {} with {rays} rays per pixel: {pixels} rays is more than radcol renders (2^30)",
+            a.width, a.height
         )));
     }
     if let Some(t) = a.tessellation.filter(|t| !(1..=64).contains(t)) {
@@ -179,7 +185,7 @@ pub(super) fn look(a: &SolveArgs) -> Result<LookSpec, BadInput> {
         render: RenderOptions {
             width: a.width,
             height: a.height,
-            samples: a.samples,
+            samples_per_pixel: rays as u32,
             ..RenderOptions::default()
         },
         tone: ToneMap {

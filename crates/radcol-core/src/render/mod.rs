@@ -50,15 +50,15 @@ pub enum RenderError {
         /// Elements of the mesh rendered.
         expected: usize,
     },
-    /// Zero width or height, or zero supersamples.
-    #[error("image size {width}×{height} with {samples}×{samples} samples per pixel: all must be at least 1")]
+    /// Zero width or height, or zero samples per pixel.
+    #[error("image size {width}×{height} with {samples_per_pixel} samples per pixel: all must be at least 1")]
     ImageSize {
         /// Width asked for.
         width: u32,
         /// Height asked for.
         height: u32,
-        /// Samples per pixel axis.
-        samples: u32,
+        /// Samples (rays) per pixel.
+        samples_per_pixel: u32,
     },
     /// The camera is degenerate.
     #[error("{0}")]
@@ -83,9 +83,10 @@ pub struct RenderOptions {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
-    /// Supersamples per pixel axis: `samples`² rays per pixel on a regular grid
-    /// (1 shoots one ray through the pixel centre).
-    pub samples: u32,
+    /// Rays per pixel ([`pixel_samples`]): a square n² on the regular n × n
+    /// grid, any other count on a low-discrepancy set (1 shoots one ray
+    /// through the pixel centre).
+    pub samples_per_pixel: u32,
     /// Linear value of pixels (or sub-samples) whose ray hits nothing.
     pub background: [f32; 3],
     /// Facets per curved-element edge in the BVH (n² facets per curved element).
@@ -97,7 +98,7 @@ impl Default for RenderOptions {
         Self {
             width: 640,
             height: 480,
-            samples: 2,
+            samples_per_pixel: 4,
             background: [0.0; 3],
             curved_subdivisions: 8,
         }
@@ -161,7 +162,7 @@ pub fn render(
 
 /// Renders with a prebuilt hierarchy (for several views of one mesh).
 ///
-/// Each pixel averages `samples`² rays on a regular sub-grid. A ray that hits a
+/// Each pixel averages its [`pixel_samples`] rays. A ray that hits a
 /// front face contributes u_n / π at the hit, a back face contributes black, a
 /// miss the background. Rows are rendered in parallel.
 pub fn render_with(
@@ -205,9 +206,30 @@ pub fn render_element_values(
     })
 }
 
-/// The pixel loop: `samples`² rays per pixel on a regular sub-grid; each
-/// pixel is the mean of `shade` over its rays (a hit, or None for a miss)
-/// where `shade` gives a value, NaN where it gives none. Rows in parallel.
+/// Where in a pixel (offsets in [0, 1)²) its `spp` rays go: a square
+/// count n² on the regular n × n grid of cell centres; any other count on
+/// the R2 low-discrepancy sequence (M. Roberts, "The unreasonable
+/// effectiveness of quasirandom sequences", 2018: offsets 1/2 + i (1/g,
+/// 1/g²) modulo 1, g the plastic number), whose points spread evenly for
+/// every count.
+pub fn pixel_samples(spp: u32) -> Vec<[f64; 2]> {
+    let n = (spp as f64).sqrt().round() as u32;
+    if n * n == spp {
+        let m = n as f64;
+        return (0..n)
+            .flat_map(|j| (0..n).map(move |i| [(i as f64 + 0.5) / m, (j as f64 + 0.5) / m]))
+            .collect();
+    }
+    const G: f64 = 1.324_717_957_244_746;
+    let a = [1.0 / G, 1.0 / (G * G)];
+    (0..spp)
+        .map(|i| a.map(|a| (0.5 + i as f64 * a).fract()))
+        .collect()
+}
+
+/// The pixel loop: [`pixel_samples`] rays per pixel; each pixel is the
+/// mean of `shade` over its rays (a hit, or None for a miss) where `shade`
+/// gives a value, NaN where it gives none. Rows in parallel.
 fn trace(
     bvh: &ElementBvh,
     camera: &Camera,
@@ -217,22 +239,22 @@ fn trace(
     let RenderOptions {
         width,
         height,
-        samples,
+        samples_per_pixel,
         ..
     } = *opts;
-    if width == 0 || height == 0 || samples == 0 {
+    if width == 0 || height == 0 || samples_per_pixel == 0 {
         return Err(RenderError::ImageSize {
             width,
             height,
-            samples,
+            samples_per_pixel,
         });
     }
     camera.validate().map_err(RenderError::Camera)?;
     let w = width as usize;
     let mut rgb = vec![[0.0f32; 3]; w * height as usize];
     let mut coverage = vec![0.0f32; w * height as usize];
-    let n = samples as f64;
-    let weight = 1.0 / (n * n);
+    let offsets = pixel_samples(samples_per_pixel);
+    let weight = 1.0 / offsets.len() as f64;
     rgb.par_chunks_mut(w)
         .zip(coverage.par_chunks_mut(w))
         .enumerate()
@@ -240,18 +262,15 @@ fn trace(
             for x in 0..w {
                 let mut acc = [0.0f64; 3];
                 let (mut hits, mut shaded) = (0u32, 0u32);
-                for j in 0..samples {
-                    for i in 0..samples {
-                        let px = x as f64 + (i as f64 + 0.5) / n;
-                        let py = y as f64 + (j as f64 + 0.5) / n;
-                        let dir = camera.ray_direction(px, py, width, height);
-                        let hit = bvh.closest_hit(camera.eye, dir);
-                        hits += u32::from(hit.is_some());
-                        if let Some(v) = shade(hit.as_ref()) {
-                            shaded += 1;
-                            for c in 0..3 {
-                                acc[c] += v[c];
-                            }
+                for &[dx, dy] in &offsets {
+                    let (px, py) = (x as f64 + dx, y as f64 + dy);
+                    let dir = camera.ray_direction(px, py, width, height);
+                    let hit = bvh.closest_hit(camera.eye, dir);
+                    hits += u32::from(hit.is_some());
+                    if let Some(v) = shade(hit.as_ref()) {
+                        shaded += 1;
+                        for c in 0..3 {
+                            acc[c] += v[c];
                         }
                     }
                 }

@@ -170,7 +170,7 @@ fn constant_solution_renders_constant() {
     let opts = RenderOptions {
         width: 40,
         height: 30,
-        samples: 2,
+        samples_per_pixel: 4,
         background: [9.0; 3],
         curved_subdivisions: 1,
     };
@@ -199,7 +199,7 @@ fn back_faces_black_misses_background() {
     let opts = RenderOptions {
         width: 21,
         height: 15,
-        samples: 3,
+        samples_per_pixel: 9,
         background: bg,
         curved_subdivisions: 1,
     };
@@ -233,7 +233,7 @@ fn linear_solution_matches_closed_form() {
     let opts = RenderOptions {
         width: w,
         height: h,
-        samples: 1,
+        samples_per_pixel: 1,
         background: [0.0; 3],
         curved_subdivisions: 1,
     };
@@ -376,4 +376,80 @@ fn auto_camera_shows_front_faces() {
     let cam = auto_camera(&mesh);
     assert!(front_fraction(&mesh, &cam) > 0.1, "{cam:?}");
     assert!(cam.validate().is_ok());
+}
+
+/// A square count is the regular grid of cell centres; any other count
+/// (every other one, below) spreads over the pixel: every point inside it, no two alike, and each
+/// half and quarter of the pixel holding its share to within 3 points for
+/// every count up to 256 (independent random points would be off by about
+/// √N / 2, 8 at 256).
+#[test]
+fn pixel_samples_cover_the_pixel() {
+    assert_eq!(pixel_samples(1), vec![[0.5, 0.5]]);
+    assert_eq!(
+        pixel_samples(4),
+        vec![[0.25, 0.25], [0.75, 0.25], [0.25, 0.75], [0.75, 0.75]]
+    );
+    let square = |n: u32| (1..=16).any(|m| m * m == n);
+    for spp in (2..=256u32).filter(|&n| !square(n)) {
+        let pts = pixel_samples(spp);
+        assert_eq!(pts.len(), spp as usize);
+        for (i, p) in pts.iter().enumerate() {
+            assert!(p.iter().all(|c| (0.0..1.0).contains(c)), "{spp}: {p:?}");
+            assert!(pts[..i].iter().all(|q| q != p), "{spp}: {p:?} twice");
+        }
+        let n = spp as f64;
+        let count = |f: &dyn Fn(&[f64; 2]) -> bool| pts.iter().filter(|p| f(p)).count() as f64;
+        for axis in 0..2 {
+            let low = count(&|p| p[axis] < 0.5);
+            assert!(
+                (low - n / 2.0).abs() <= 3.0,
+                "{spp}, axis {axis}: {low} below 1/2"
+            );
+        }
+        for (qx, qy) in [(false, false), (false, true), (true, false), (true, true)] {
+            let q = count(&|p| (p[0] < 0.5) == qx && (p[1] < 0.5) == qy);
+            assert!((q - n / 4.0).abs() <= 3.0, "{spp}: {q} in a quarter");
+        }
+    }
+}
+
+/// The fraction of rays that hit a surface covering part of a pixel tends
+/// to the covered fraction for counts that are not squares too: a view
+/// whose centre pixel is cut by the room's floor edge is covered the same
+/// with 7, 50 and 49 (7²) rays to within the sets' discrepancy.
+#[test]
+fn coverage_agrees_across_sample_counts() {
+    let mesh = room(1);
+    let u = interpolate(&mesh, 0, |_| 5.0);
+    let camera = Camera::parse("1,-6,0.75, 1,1.5,0.75, 0,0,1, 30").unwrap();
+    let cov = |spp| {
+        let opts = RenderOptions {
+            width: 21,
+            height: 15,
+            samples_per_pixel: spp,
+            background: [0.0; 3],
+            curved_subdivisions: 1,
+        };
+        render(&mesh, &[&u], &camera, &opts).unwrap().coverage
+    };
+    let (grid, r50, r7) = (cov(49), cov(50), cov(7));
+    let partial: Vec<usize> = (0..grid.len())
+        .filter(|&i| grid[i] > 0.0 && grid[i] < 1.0)
+        .collect();
+    assert!(!partial.is_empty(), "the view cuts no pixel");
+    for &i in &partial {
+        assert!(
+            (r50[i] - grid[i]).abs() <= 0.1,
+            "pixel {i}: {} vs {}",
+            r50[i],
+            grid[i]
+        );
+        assert!(
+            (r7[i] - grid[i]).abs() <= 0.3,
+            "pixel {i}: {} vs {}",
+            r7[i],
+            grid[i]
+        );
+    }
 }
