@@ -134,28 +134,54 @@ pub struct ProblemArgs {
     pub scene: String,
 
     /// Polynomial degree r of the collocation space, 0..=6.
-    #[arg(long, short = 'r', value_name = "R", default_value_t = 1)]
+    #[arg(
+        help_heading = "Method",
+        long,
+        short = 'r',
+        value_name = "R",
+        default_value_t = 1
+    )]
     pub degree: usize,
 
     /// Node parameter α in (0, 1/3), or `auto`: of the α at which the node rule gains a
     /// degree of precision (α0 for odd r), the one with the smallest Lebesgue constant;
     /// else the α minimising the degree-(r+1) defect (see `radcol nodes`).
-    #[arg(long, value_name = "A|auto", default_value = "auto")]
+    #[arg(
+        help_heading = "Method",
+        long,
+        value_name = "A|auto",
+        default_value = "auto"
+    )]
     pub alpha: String,
 
     /// Reflectivity ρ: a number or an expression in x, y, z; must lie in [0, 1) at every node.
     /// Scenes with materials take ρ from Kd and refuse this flag [default: 0.5].
-    #[arg(long, value_name = "EXPR", allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Problem",
+        long,
+        value_name = "EXPR",
+        allow_hyphen_values = true
+    )]
     pub rho: Option<String>,
 
     /// Emission E: a number or an expression in x, y, z [default: 1 without --exact;
     /// with --exact, E is manufactured as u - K u with an accurate reference quadrature;
     /// scenes with materials take E from Ke and refuse this flag].
-    #[arg(long, value_name = "EXPR", allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Problem",
+        long,
+        value_name = "EXPR",
+        allow_hyphen_values = true
+    )]
     pub emission: Option<String>,
 
     /// Exact solution u (an expression in x, y, z), to measure errors [default: none].
-    #[arg(long, value_name = "EXPR", allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Problem",
+        long,
+        value_name = "EXPR",
+        allow_hyphen_values = true
+    )]
     pub exact: Option<String>,
 
     /// Grade the mesh towards concave edges (a floor meeting a wall) and contact lines (a
@@ -163,84 +189,120 @@ pub struct ProblemArgs {
     /// distance d from the nearest such line, within --grade-zone D, after
     /// --level/--max-edge (H: their size). Q in [1, 3]; 2 suits degree 1 (Atkinson, Chien
     /// and Seol 2000) [default: no grading].
-    #[arg(long, value_name = "Q", allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Mesh",
+        long,
+        value_name = "Q",
+        allow_hyphen_values = true
+    )]
     pub grade: Option<f64>,
 
     /// With --grade: the width D of the graded zone on either side of each line (scene
     /// units) [default: a quarter of the scene's largest extent].
-    #[arg(long, value_name = "D", allow_hyphen_values = true, requires = "grade")]
+    #[arg(
+        help_heading = "Mesh",
+        long,
+        value_name = "D",
+        allow_hyphen_values = true,
+        requires = "grade"
+    )]
     pub grade_zone: Option<f64>,
 
     /// How a scene's MTL `Ke` is read: as the exitance E of the equation (radiosity units,
     /// radcol's convention), or as radiance (renderers' convention: E = π Ke). The reported u
     /// is radiosity either way; u/π is its radiance.
-    #[arg(long, value_enum, default_value_t = KeArg::Exitance)]
+    #[arg(help_heading = "Problem", long, value_enum, default_value_t = KeArg::Exitance)]
     pub ke: KeArg,
 
     /// Linear solver.
-    #[arg(long, value_enum, default_value_t = SolverArg::Gmres)]
+    #[arg(help_heading = "Linear system", long, value_enum, default_value_t = SolverArg::Gmres)]
     pub solver: SolverArg,
 
     /// The geometric operator: the dense N×N matrix, or a hierarchical matrix whose
     /// well-separated blocks are low-rank (adaptive cross approximation to
     /// --compression-tol), fully shadowed blocks zero. `auto`: dense when it fits in memory
     /// (or with --solver lu), else compressed.
-    #[arg(long, value_enum, default_value_t = OperatorArg::Auto)]
+    #[arg(help_heading = "Linear system", long, value_enum, default_value_t = OperatorArg::Auto)]
     pub operator: OperatorArg,
 
     /// Relative tolerance of each compressed block (Frobenius), in (0, 1); the solution's
     /// error from compression is of this order.
-    #[arg(long, value_name = "T", default_value = "1e-8")]
+    #[arg(
+        help_heading = "Linear system",
+        long,
+        value_name = "T",
+        default_value = "1e-8"
+    )]
     pub compression_tol: f64,
 
     /// GMRES relative residual tolerance, in (0, 1).
-    #[arg(long, value_name = "T", default_value = "1e-12")]
+    #[arg(
+        help_heading = "Linear system",
+        long,
+        value_name = "T",
+        default_value = "1e-12"
+    )]
     pub tol: f64,
 
     /// GMRES restart length (Krylov dimension), >= 1.
-    #[arg(long, value_name = "M", default_value_t = 60)]
+    #[arg(
+        help_heading = "Linear system",
+        long,
+        value_name = "M",
+        default_value_t = 60
+    )]
     pub restart: usize,
 
     /// GMRES iteration limit, >= 1.
-    #[arg(long, value_name = "N", default_value_t = 2000)]
+    #[arg(
+        help_heading = "Linear system",
+        long,
+        value_name = "N",
+        default_value_t = 2000
+    )]
     pub max_iters: usize,
 
     /// Target relative error of each element integral, in [1e-15, 1) (f64 cannot deliver
     /// less).
-    #[arg(long, value_name = "Q", default_value = "1e-12")]
+    #[arg(
+        help_heading = "Assembly",
+        long,
+        value_name = "Q",
+        default_value = "1e-12"
+    )]
     pub quad_tol: f64,
 
     /// Assembly backend.
-    #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
+    #[arg(help_heading = "Assembly", long, value_enum, default_value_t = BackendArg::Auto)]
     pub backend: BackendArg,
 
     /// Partly visible pairs in scenes that occlude: exact clipping, or rays per
     /// quadrature point (for comparison).
-    #[arg(long, value_enum, default_value_t = VisibilityArg::Clip)]
+    #[arg(help_heading = "Assembly", long, value_enum, default_value_t = VisibilityArg::Clip)]
     pub visibility: VisibilityArg,
 
     /// GPU arithmetic precision (the CPU backend is always f64).
-    #[arg(long, value_enum, default_value_t = PrecisionArg::Auto)]
+    #[arg(help_heading = "Assembly", long, value_enum, default_value_t = PrecisionArg::Auto)]
     pub precision: PrecisionArg,
 
     /// Skip the a posteriori error estimate (the residual E + K u_n - u_n at check points
     /// of every element, about as much work again as the assembly) [default: estimate].
-    #[arg(long)]
+    #[arg(help_heading = "Accuracy", long)]
     pub no_estimate: bool,
 
     /// Show u_n as computed in images and vertex meshes, negative values included. By
     /// default, where u_n < 0 although E, rho >= 0 (ringing at contact lines and shadow
     /// edges), each such element is scaled towards its mean until it is nonnegative (Zhang
     /// and Shu's limiter: integrals kept, the change reported and added to the estimate).
-    #[arg(long)]
+    #[arg(help_heading = "Accuracy", long)]
     pub keep_negative: bool,
 
     /// Print one JSON object instead of the text report.
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     pub json: bool,
 
     /// Overwrite existing output files.
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     pub force: bool,
 }
 
@@ -265,13 +327,18 @@ pub struct SolveArgs {
     /// a sphere or ellipsoid, 12 on a box, the file's triangles for a scene) [default: 2;
     /// 0 with --max-edge; for a scene with materials given neither --level nor --max-edge:
     /// level 0 and --max-edge a tenth of its bounding box's diagonal].
-    #[arg(long, short = 'l', value_name = "L")]
+    #[arg(help_heading = "Mesh", long, short = 'l', value_name = "L")]
     pub level: Option<u32>,
 
     /// After the uniform --level (0 when --level is not given), keep splitting elements 4:1
     /// until no edge is longer than H (scene units) [default: uniform refinement only, but
     /// see --level].
-    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Mesh",
+        long,
+        value_name = "H",
+        allow_hyphen_values = true
+    )]
     pub max_edge: Option<f64>,
 
     /// Refine adaptively until the estimated max error relative to max |u| is at most TOL
@@ -282,25 +349,35 @@ pub struct SolveArgs {
     /// block's corner on a floor), or below 1e-5 of the scene's diagonal, elements are no
     /// longer split; the loop then stops when the rest is below TOL and names those points
     /// [default: uniform refinement only].
-    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Accuracy",
+        long,
+        value_name = "TOL",
+        allow_hyphen_values = true
+    )]
     pub target_error: Option<f64>,
 
     /// With --target-error: never solve with more unknowns than N [default: what the
     /// dense matrix's memory allows].
-    #[arg(long, value_name = "N", requires = "target_error")]
+    #[arg(
+        help_heading = "Accuracy",
+        long,
+        value_name = "N",
+        requires = "target_error"
+    )]
     pub max_unknowns: Option<u64>,
 
     /// With --target-error: fail (exit 1, outputs still written) when the target is not
     /// reached within the budget (a stop where only the neighbourhoods of the singular
     /// points the report names are above it counts as reached).
-    #[arg(long, requires = "target_error")]
+    #[arg(help_heading = "Accuracy", long, requires = "target_error")]
     pub strict: bool,
 
     /// Write results; repeat for several files. By extension: .csv (one row per collocation
     /// node: element,node,x,y,z,u…), .ply and .glb/.gltf (per-vertex radiosity on a
     /// tessellation of every element), .png (tone-mapped image) or .exr (linear radiance u/π)
     /// seen by --camera. Refuses to overwrite without --force.
-    #[arg(long, short = 'o', value_name = "FILE")]
+    #[arg(help_heading = "Output", long, short = 'o', value_name = "FILE")]
     pub out: Vec<PathBuf>,
 
     /// After the solve, solve again on the same matrix (no reassembly) for new lights or
@@ -308,43 +385,59 @@ pub struct SolveArgs {
     /// scene: ';'-separated NAME=R,G,B or NAME.Ke=R,G,B (emission of material NAME) and
     /// NAME.Kd=R,G,B (its reflectance); for a surface: a new emission expression. The
     /// --out files show the first solve.
-    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Problem",
+        long,
+        value_name = "SPEC",
+        allow_hyphen_values = true
+    )]
     pub relight: Vec<String>,
 
     /// Write a PNG map of the estimated error seen by --camera: each element coloured by its
     /// estimated max error relative to max |u| (worst channel), log scale from 1e-6 (dark)
     /// to 1e-1 (bright), a colour bar with a tick per decade along the bottom edge.
-    #[arg(long, value_name = "FILE.png")]
+    #[arg(help_heading = "Output", long, value_name = "FILE.png")]
     pub error_map: Option<PathBuf>,
 
     /// Camera for .png/.exr as ex,ey,ez,tx,ty,tz,ux,uy,uz,fov: eye, target, up vector and
     /// vertical field of view in degrees [default: the scene's camera, else one looking at
     /// the whole scene along +z].
-    #[arg(long, value_name = "EYE,TARGET,UP,FOV", allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Image",
+        long,
+        value_name = "EYE,TARGET,UP,FOV",
+        allow_hyphen_values = true
+    )]
     pub camera: Option<String>,
 
     /// Image width in pixels.
-    #[arg(long, value_name = "PX", default_value_t = 640)]
+    #[arg(help_heading = "Image", long, value_name = "PX", default_value_t = 640)]
     pub width: u32,
 
     /// Image height in pixels.
-    #[arg(long, value_name = "PX", default_value_t = 480)]
+    #[arg(help_heading = "Image", long, value_name = "PX", default_value_t = 480)]
     pub height: u32,
 
     /// Rays (samples) per pixel: a square count on a regular grid, any other
     /// on a low-discrepancy set [default: 4]
-    #[arg(long, value_name = "N", conflicts_with = "samples")]
+    #[arg(
+        help_heading = "Image",
+        long,
+        value_name = "N",
+        conflicts_with = "samples"
+    )]
     pub spp: Option<u32>,
 
     /// Rays per pixel axis, kept with its old meaning: N² rays per pixel on a
     /// regular grid, the same as --spp N²
-    #[arg(long, value_name = "N")]
+    #[arg(help_heading = "Image", long, value_name = "N")]
     pub samples: Option<u32>,
 
     /// Exposure for 8-bit outputs: `auto` (the 99th luminance percentile maps to white),
     /// `auto+S` / `auto-S` (auto, then S stops brighter/darker), or S stops applied to the
     /// radiance as is.
     #[arg(
+        help_heading = "Image",
         long,
         value_name = "auto|S",
         default_value = "auto",
@@ -353,12 +446,12 @@ pub struct SolveArgs {
     pub exposure: String,
 
     /// Tone curve for 8-bit outputs.
-    #[arg(long, value_enum, default_value_t = TonemapArg::Aces)]
+    #[arg(help_heading = "Image", long, value_enum, default_value_t = TonemapArg::Aces)]
     pub tonemap: TonemapArg,
 
     /// Triangles per element edge in .ply/.glb/.gltf (N² per element), so that degree-r
     /// polynomials show inside elements [default: max(r, 1)].
-    #[arg(long, value_name = "N")]
+    #[arg(help_heading = "Image", long, value_name = "N")]
     pub tessellation: Option<u32>,
 }
 
@@ -369,24 +462,34 @@ pub struct StudyArgs {
     pub problem: ProblemArgs,
 
     /// Refinement levels A..B (inclusive; A..=B also accepted), e.g. 0..3.
-    #[arg(long, value_name = "A..B", required = true)]
+    #[arg(help_heading = "Mesh", long, value_name = "A..B", required = true)]
     pub levels: String,
 
     /// Draw error vs h and error vs time as an SVG log-log plot (with --degrees
     /// or --adaptive: error vs unknowns and vs wall time, a line per degree and
     /// refinement) [default: none]; refuses to overwrite without --force.
-    #[arg(long, value_name = "FILE.svg")]
+    #[arg(help_heading = "Output", long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
 
     /// Compare the degrees A..B, each at its auto α: a table per degree, then the fastest
     /// setting (degree, level or adaptive step) for each decade of error [default: --degree
     /// alone].
-    #[arg(long, value_name = "A..B", conflicts_with = "degree")]
+    #[arg(
+        help_heading = "Method",
+        long,
+        value_name = "A..B",
+        conflicts_with = "degree"
+    )]
     pub degrees: Option<String>,
 
     /// For each degree, also refine adaptively to TOL (estimated max error relative to max
     /// |u|) from the first level: every step is a row of the comparison.
-    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Accuracy",
+        long,
+        value_name = "TOL",
+        allow_hyphen_values = true
+    )]
     pub adaptive: Option<f64>,
 }
 

@@ -1616,3 +1616,43 @@ fn spp_counts_rays_per_pixel() {
         &["--spp", "--samples"],
     );
 }
+
+/// `solve --help` and `study --help` group their options under headings,
+/// each option under the one it belongs to.
+#[test]
+fn help_groups_options_under_headings() {
+    let help = |cmd: &str| String::from_utf8(radcol_ok(&[cmd, "--help"]).stdout).unwrap();
+    let solve = help("solve");
+    let headings = [
+        ("Method:", "--degree"),
+        ("Problem:", "--emission"),
+        ("Mesh:", "--max-edge"),
+        ("Linear system:", "--solver"),
+        ("Assembly:", "--backend"),
+        ("Accuracy:", "--target-error"),
+        ("Output:", "--out"),
+        ("Image:", "--spp"),
+    ];
+    let at = |text: &str, needle: &str| {
+        text.find(needle)
+            .unwrap_or_else(|| panic!("{needle} missing in {text}"))
+    };
+    for (i, (heading, flag)) in headings.iter().enumerate() {
+        // The option's own line: the flag with its value name.
+        let (h, f) = (
+            at(&solve, &format!("\n{heading}\n")),
+            at(&solve, &format!("{flag} <")),
+        );
+        assert!(h < f, "{flag} before {heading}");
+        if let Some((next, _)) = headings.get(i + 1) {
+            assert!(
+                f < at(&solve, &format!("\n{next}\n")),
+                "{flag} after {next}"
+            );
+        }
+    }
+    let study = help("study");
+    for heading in ["Mesh:", "Accuracy:", "Output:"] {
+        at(&study, &format!("\n{heading}\n"));
+    }
+}
