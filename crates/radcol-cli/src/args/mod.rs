@@ -1,8 +1,11 @@
 //! Layer 1: the command line as clap sees it. Plain strings and numbers only;
 //! turning them into core types (and rejecting bad values) is `config.rs`'s job.
 
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand};
+
+mod values;
 use std::path::PathBuf;
+pub use values::*;
 
 const SCENES: &str = "sphere (unit sphere), sphere:R, ellipsoid:A,B,C, box:LX,LY,LZ \
 (the room [0,LX]x[0,LY]x[0,LZ]); the built-in triangle scenes cornell (the Cornell box), \
@@ -62,68 +65,6 @@ pub struct CompletionsArgs {
     /// The shell.
     #[arg(value_enum)]
     pub shell: clap_complete::Shell,
-}
-
-/// Which linear solver.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum SolverArg {
-    /// Restarted GMRES (tolerance --tol).
-    Gmres,
-    /// Dense LU factorisation (needs a second N×N matrix).
-    Lu,
-}
-
-/// Which geometric operator.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum OperatorArg {
-    /// Dense when the matrix fits in memory or the solver is LU, else compressed.
-    Auto,
-    /// The dense N×N matrix (8 N² bytes).
-    Dense,
-    /// A hierarchical matrix (GMRES only).
-    Compressed,
-}
-
-/// Which assembly backend.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum BackendArg {
-    /// rayon on all cores, f64.
-    Cpu,
-    /// wgpu compute shaders on the best adapter (software ones such as lavapipe
-    /// included); an error when there is none.
-    Gpu,
-    /// A hardware GPU adapter when one exists (and offers f64 when f64 is
-    /// asked for), else the CPU; the report says which was used.
-    Auto,
-}
-
-/// What an MTL file's `Ke` means.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum KeArg {
-    /// Emitted flux per unit area (W/m², the E of the radiosity equation): Ke as given.
-    Exitance,
-    /// Emitted radiance (W/m²/sr, as path tracers read it): E = π Ke for a diffuse emitter.
-    Radiance,
-}
-
-/// How partly visible element pairs are integrated in scenes that occlude.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum VisibilityArg {
-    /// Over the exactly clipped visible region (accurate to the quadrature tolerance).
-    Clip,
-    /// With a ray per quadrature point (the textbook way; errors ~1e-3 at shadow edges).
-    Rays,
-}
-
-/// Arithmetic precision on the GPU.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum PrecisionArg {
-    /// f64 when the adapter offers SHADER_F64, else f32.
-    Auto,
-    /// f64 on the device.
-    F64,
-    /// f32 on the device (results widened to f64).
-    F32,
 }
 
 /// The problem and discretization options shared by `solve` and `study`.
@@ -304,17 +245,6 @@ pub struct ProblemArgs {
     /// Overwrite existing output files.
     #[arg(help_heading = "Output", long)]
     pub force: bool,
-}
-
-/// Tone curve for 8-bit outputs (PNG, vertex colours of PLY and glTF).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum TonemapArg {
-    /// Narkowicz's ACES filmic fit.
-    Aces,
-    /// Reinhard's x / (1 + x), per channel.
-    Reinhard,
-    /// Clamp to [0, 1].
-    Linear,
 }
 
 /// `radcol solve`.
