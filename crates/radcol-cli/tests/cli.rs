@@ -434,7 +434,7 @@ fn help_documents_defaults() {
     for d in [
         "[default: 1]",
         "[default: auto]",
-        "[default: 2]",
+        "[default: 4]",
         "[default: 0.5]",
         "[default: gmres]",
         "[default: 1e-12]",
