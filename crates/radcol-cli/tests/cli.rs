@@ -778,7 +778,18 @@ fn vertex_files_carry_the_solution() {
 
 #[test]
 fn info_describes_a_scene() {
+    // Without --plan: sizes from the geometry, no pair counts or timing.
     let v = stdout_json(&radcol(&["info", "cornell", "--level", "0", "--json"]));
+    assert!(v["estimate"].is_null() && v["planned"] == false, "{v}");
+    assert!(
+        v["memory"].is_object() && v["compressed"].is_object(),
+        "{v}"
+    );
+    let text = String::from_utf8_lossy(&radcol_ok(&["info", "cornell"]).stdout).to_string();
+    assert!(text.contains("time estimate   - (--plan builds"), "{text}");
+    let v = stdout_json(&radcol(&[
+        "info", "cornell", "--level", "0", "--plan", "--json",
+    ]));
     let c = &v["contents"];
     assert_eq!(c["triangles"], 50);
     assert_eq!(c["materials"].as_array().unwrap().len(), 4);

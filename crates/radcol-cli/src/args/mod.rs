@@ -459,6 +459,13 @@ pub struct InfoArgs {
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub max_edge: Option<f64>,
 
+    /// Also build the assembly plan (every element pair classified, as a
+    /// solve does: seconds to minutes), to count the pairs and time sample
+    /// row blocks for an assembly estimate [default: sizes from the
+    /// geometry only]
+    #[arg(long)]
+    pub plan: bool,
+
     /// Print one JSON object instead of the text report.
     #[arg(long)]
     pub json: bool,

@@ -52,8 +52,11 @@ pub struct InfoReport {
     pub visibility: radcol_core::visibility::VisibilityAnalysis,
     /// Triangles, materials and emitters of a scene with materials.
     pub contents: Option<SceneInfo>,
-    /// Assembly time and work, measured on a sample (None for large meshes).
+    /// Assembly time and work, measured on a sample (None without `--plan`,
+    /// or for large meshes).
     pub estimate: Option<Estimate>,
+    /// Whether the plan was asked for (`--plan`).
+    pub planned: bool,
 }
 
 /// Element sizes (longest edge).
@@ -271,6 +274,10 @@ impl fmt::Display for InfoReport {
         }
         match &i.estimate {
             Some(e) => write!(w, "{e}"),
+            None if !i.planned => writeln!(
+                w,
+                "  time estimate   - (--plan builds the assembly plan: pair counts and timed row blocks)"
+            ),
             None => writeln!(
                 w,
                 "  time estimate   - (more elements than radcol info plans; try a lower --level)"

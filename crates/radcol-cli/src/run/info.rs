@@ -43,6 +43,7 @@ pub fn run_info(job: InfoJob, w: &mut dyn Write) -> Result<()> {
         level,
         max_edge,
         degree: job.degree,
+        plan: job.plan,
     };
     report::emit(w, &info_report(&refinement, &loaded), job.json)
 }
@@ -53,6 +54,8 @@ struct Refinement {
     level: u32,
     max_edge: Option<f64>,
     degree: usize,
+    /// Whether to build the assembly plan (`--plan`).
+    plan: bool,
 }
 
 /// The mesh of `job`, or when it is too big to build, the finest uniform
@@ -89,9 +92,10 @@ fn info_report(job: &Refinement, loaded: &Loaded) -> InfoReport {
     let vis = visibility::analyze(&job.surface);
     let bbox = job.surface.bounding_box();
     // Planned on the mesh just built, which is the job's when it is small enough.
-    let estimate = (elements <= INFO_MAX_PLANNED_ELEMENTS && measured_level == job.level)
-        .then(|| estimate_assembly(job.degree, &mesh, &vis))
-        .flatten();
+    let estimate =
+        (job.plan && elements <= INFO_MAX_PLANNED_ELEMENTS && measured_level == job.level)
+            .then(|| estimate_assembly(job.degree, &mesh, &vis))
+            .flatten();
     InfoReport {
         scene: job.surface.name.clone(),
         level: job.level,
@@ -122,6 +126,7 @@ fn info_report(job: &Refinement, loaded: &Loaded) -> InfoReport {
             .flatten(),
         visibility: vis,
         contents: loaded.scene().map(|sc| scene_info(sc)),
+        planned: job.plan,
         estimate,
     }
 }

@@ -147,6 +147,8 @@ pub struct InfoJob {
     pub degree: usize,
     /// Refinement level; None: the default refinement.
     pub level: Option<u32>,
+    /// Build the assembly plan for pair counts and a time estimate.
+    pub plan: bool,
     /// JSON instead of text.
     pub json: bool,
 }
@@ -312,6 +314,7 @@ fn info_job(a: InfoArgs) -> Result<InfoJob> {
         max_edge,
         degree,
         level: a.level,
+        plan: a.plan,
         json: a.json,
     })
 }
