@@ -96,6 +96,7 @@ fn try_main() -> anyhow::Result<()> {
         },
     };
     progress::set_quiet(cli.quiet);
+    progress::set_verbose(cli.verbose);
     if let Some(n) = cli.threads {
         // Before any parallel work: the global pool is built once.
         rayon::ThreadPoolBuilder::new()

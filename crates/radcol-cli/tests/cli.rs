@@ -1667,3 +1667,49 @@ fn help_groups_options_under_headings() {
         at(&study, &format!("\n{heading}\n"));
     }
 }
+
+/// -v logs every stage of a solve on stderr (here a pipe, no terminal),
+/// with times, the stage before's duration and the step lines of an
+/// adaptive run; without it stderr stays empty; -v and -q conflict.
+#[test]
+fn verbose_logs_each_stage() {
+    let run = |args: &[&str]| {
+        let out = radcol_ok(args);
+        String::from_utf8(out.stderr).unwrap()
+    };
+    let log = run(&["-v", "solve", "sphere", "--level", "1", "--json"]);
+    for stage in [
+        "s  plan (",
+        "s  assembly (",
+        "s  solve (1 channels)",
+        "s  done (solve: ",
+    ] {
+        assert!(
+            log.lines()
+                .any(|l| l.starts_with("radcol:") && l.contains(stage)),
+            "{stage} in {log}"
+        );
+    }
+    assert!(
+        log.contains("(plan: ") && log.contains("(assembly: "),
+        "{log}"
+    );
+    assert_eq!(run(&["solve", "sphere", "--level", "1", "--json"]), "");
+    let log = run(&[
+        "solve",
+        "shadow",
+        "--target-error",
+        "3e-2",
+        "--verbose",
+        "--json",
+    ]);
+    assert!(
+        log.lines().any(|l| l.trim_start().starts_with("step")),
+        "{log}"
+    );
+    assert_one_line_error(
+        &["-v", "-q", "solve", "sphere"],
+        2,
+        &["--verbose", "--quiet"],
+    );
+}

@@ -39,6 +39,12 @@ pub struct Cli {
     /// print there; the report on stdout is unchanged).
     #[arg(long, short = 'q', global = true)]
     pub quiet: bool,
+
+    /// Log each stage of a solve on stderr as it starts, with the seconds
+    /// since the start and the stage before's duration (also where stderr is
+    /// no terminal).
+    #[arg(long, short = 'v', global = true, conflicts_with = "quiet")]
+    pub verbose: bool,
 }
 
 /// The subcommands.
