@@ -122,7 +122,7 @@ impl Bar {
 impl Progress for Bar {
     fn start(&self, stage: &str, total: u64) {
         let unit = match stage {
-            "plan" | "assembly" => "row blocks",
+            "plan" | "assembly" | "estimate" => "row blocks",
             "solve" => "channels",
             _ => "",
         };

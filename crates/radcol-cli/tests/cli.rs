@@ -1669,7 +1669,7 @@ fn help_groups_options_under_headings() {
 }
 
 /// -v logs every stage of a solve on stderr (here a pipe, no terminal),
-/// with times, the stage before's duration and the step lines of an
+/// the error estimate included (none with --no-estimate), with times, the stage before's duration and the step lines of an
 /// adaptive run; without it stderr stays empty; -v and -q conflict.
 #[test]
 fn verbose_logs_each_stage() {
@@ -1682,7 +1682,8 @@ fn verbose_logs_each_stage() {
         "s  plan (",
         "s  assembly (",
         "s  solve (1 channels)",
-        "s  done (solve: ",
+        "s  estimate (32 row blocks) (solve: ",
+        "s  done (estimate: ",
     ] {
         assert!(
             log.lines()
@@ -1695,6 +1696,11 @@ fn verbose_logs_each_stage() {
         "{log}"
     );
     assert_eq!(run(&["solve", "sphere", "--level", "1", "--json"]), "");
+    let log = run(&["-v", "solve", "sphere", "--level", "1", "--no-estimate"]);
+    assert!(
+        !log.contains("estimate (") && log.contains("done (solve: "),
+        "{log}"
+    );
     let log = run(&[
         "solve",
         "shadow",

@@ -7,7 +7,7 @@ use std::sync::Arc;
 /// Observer of a solve's progress, for progress bars. Called from worker
 /// threads; must be cheap.
 pub trait Progress: Send + Sync {
-    /// A stage starts ("plan", "assembly": row blocks, "solve": channels);
+    /// A stage starts ("plan", "assembly", "estimate": row blocks, "solve": channels);
     /// `total` units of work follow.
     fn start(&self, stage: &str, total: u64);
     /// `n` more units of the current stage are done.

@@ -193,6 +193,12 @@ fn estimate_channels(
         return Ok((None, None));
     };
     let disc = first.solution.discretization();
+    // A stage of its own (about as long as the assembly), counted in the
+    // row blocks it fills, reported when it ends.
+    let blocks = disc.mesh().len() as u64;
+    if let Some(p) = &cfg.progress {
+        p.start("estimate", blocks);
+    }
     let nodes = check_nodes(disc.nodes().degree(), disc.nodes().alpha());
     let check = Arc::new(Discretization::new(disc.mesh().clone(), nodes));
     let check_fields = fields(&check, problem)?;
@@ -223,6 +229,9 @@ fn estimate_channels(
     };
     for (ch, e) in channels.iter_mut().zip(estimates) {
         ch.estimate = Some(e);
+    }
+    if let Some(p) = &cfg.progress {
+        p.advance(blocks);
     }
     Ok((Some(plan), kept))
 }
