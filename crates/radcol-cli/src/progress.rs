@@ -126,10 +126,12 @@ impl Progress for Bar {
             "solve" => "channels",
             _ => "",
         };
-        self.stage(
-            &format!("{stage} ({total} {unit})").replace(" )", ")"),
-            stage,
-        );
+        let counted = if unit.is_empty() {
+            format!("{stage} ({total})")
+        } else {
+            format!("{stage} ({total} {unit})")
+        };
+        self.stage(&counted, stage);
         self.bar.set_style(
             ProgressStyle::with_template(&format!(
                 "{{spinner}} {stage:<9} [{{bar:40}}] {{pos}}/{{len}} {unit} [{{elapsed_precise}}, eta {{eta}}]"

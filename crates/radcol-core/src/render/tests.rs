@@ -415,9 +415,10 @@ fn pixel_samples_cover_the_pixel() {
 }
 
 /// The fraction of rays that hit a surface covering part of a pixel tends
-/// to the covered fraction for counts that are not squares too: a view
-/// whose centre pixel is cut by the room's floor edge is covered the same
-/// with 7, 50 and 49 (7²) rays to within the sets' discrepancy.
+/// to the covered fraction for counts that are not squares too: on a view
+/// whose pixels the room's edges cut, 7 and 50 rays give the coverage of
+/// the 7 × 7 grid to within two rays' worth, 2/N (measured: one ray at 7,
+/// 0.017 at 50).
 #[test]
 fn coverage_agrees_across_sample_counts() {
     let mesh = room(1);
@@ -439,17 +440,9 @@ fn coverage_agrees_across_sample_counts() {
         .collect();
     assert!(!partial.is_empty(), "the view cuts no pixel");
     for &i in &partial {
-        assert!(
-            (r50[i] - grid[i]).abs() <= 0.1,
-            "pixel {i}: {} vs {}",
-            r50[i],
-            grid[i]
-        );
-        assert!(
-            (r7[i] - grid[i]).abs() <= 0.3,
-            "pixel {i}: {} vs {}",
-            r7[i],
-            grid[i]
-        );
+        for (r, n) in [(&r50, 50.0), (&r7, 7.0)] {
+            let d = (r[i] - grid[i]).abs();
+            assert!(d <= 2.0 / n, "pixel {i}, {n} rays: {} vs {}", r[i], grid[i]);
+        }
     }
 }

@@ -5,6 +5,7 @@
 //! their own message; a scene in which no two triangles face each other
 //! gets one warning for the whole.
 
+use super::overlap::plane_key;
 use super::validate::{Capped, RawTriangle};
 use super::Material;
 use glam::DVec3;
@@ -40,7 +41,7 @@ pub(super) fn facing_nothing(
     };
     // One triangle of each plane first: in a room a floor triangle meets a
     // wall among the first few instead of after every other floor triangle.
-    let order = planes_first(tris, &normals, scale);
+    let order = planes_first(tris, scale);
     let mut tests = 0u64;
     let mut lone = Vec::new();
     let mut stopped = None;
@@ -82,23 +83,12 @@ pub(super) fn facing_nothing(
     }
 }
 
-/// Triangle indices with the first triangle of every distinct plane
-/// (normal and offset to 1e-9 of `scale`) ahead of all the others.
-fn planes_first(tris: &[[DVec3; 3]], normals: &[DVec3], scale: f64) -> Vec<usize> {
-    let key = |i: usize| {
-        let n = normals[i];
-        let d = n.dot(tris[i][0]) / scale;
-        [n.x, n.y, n.z, d].map(|c| (c * 1e9).round() as i64)
-    };
+/// Triangle indices with the first triangle of every distinct oriented
+/// plane (the overlap check's [`plane_key`]) ahead of all the others.
+fn planes_first(tris: &[[DVec3; 3]], scale: f64) -> Vec<usize> {
     let mut seen = HashSet::new();
-    let (mut first, mut rest) = (Vec::new(), Vec::new());
-    for i in 0..tris.len() {
-        if seen.insert(key(i)) {
-            first.push(i);
-        } else {
-            rest.push(i);
-        }
-    }
-    first.extend(rest);
+    let (mut first, mut rest): (Vec<usize>, Vec<usize>) =
+        (0..tris.len()).partition(|&i| plane_key(&tris[i], scale).is_some_and(|k| seen.insert(k)));
+    first.append(&mut rest);
     first
 }

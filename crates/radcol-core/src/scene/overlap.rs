@@ -19,16 +19,10 @@ use std::collections::HashMap;
 /// plane tolerance.
 pub(crate) fn coplanar_overlaps(tris: &[[DVec3; 3]], scale: f64) -> Vec<(usize, usize)> {
     let mut planes: HashMap<[i64; 4], Vec<usize>> = HashMap::new();
-    for (i, [a, b, c]) in tris.iter().enumerate() {
-        let n = (*b - *a).cross(*c - *a);
-        let len = n.length();
-        if !(len > 0.0 && len.is_finite()) {
-            continue;
+    for (i, t) in tris.iter().enumerate() {
+        if let Some(key) = plane_key(t, scale) {
+            planes.entry(key).or_default().push(i);
         }
-        let n = n / len;
-        let q = |x: f64| (x * 1e9).round() as i64;
-        let key = [q(n.x), q(n.y), q(n.z), q(a.dot(n) / scale)];
-        planes.entry(key).or_default().push(i);
     }
     let mut found = Vec::new();
     for members in planes.values().filter(|m| m.len() > 1) {
@@ -37,6 +31,19 @@ pub(crate) fn coplanar_overlaps(tris: &[[DVec3; 3]], scale: f64) -> Vec<(usize, 
     found.sort_unstable();
     found.dedup();
     found
+}
+
+/// The oriented plane of triangle `[a, b, c]` as a hashable key: unit
+/// normal and offset (relative to `scale`) to 1e-9; None when degenerate.
+pub(super) fn plane_key([a, b, c]: &[DVec3; 3], scale: f64) -> Option<[i64; 4]> {
+    let n = (*b - *a).cross(*c - *a);
+    let len = n.length();
+    if !(len > 0.0 && len.is_finite()) {
+        return None;
+    }
+    let n = n / len;
+    let q = |x: f64| (x * 1e9).round() as i64;
+    Some([q(n.x), q(n.y), q(n.z), q(a.dot(n) / scale)])
 }
 
 /// Overlapping pairs among `members`, all in one plane with one orientation.
