@@ -75,6 +75,7 @@ pub mod norms;
 pub mod problem;
 pub mod progress;
 pub mod quadrature;
+pub mod query;
 pub mod render;
 pub mod run;
 pub mod scene;

@@ -4,12 +4,13 @@
 
 use crate::assembly::{ElementIntegrator, FieldPoint};
 use crate::discretization::Discretization;
+use crate::mesh::Locator;
 use crate::nodes::MAX_DEGREE;
 use crate::quadrature::RuleLadder;
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::Serialize;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// Samples per element edge of the limiter's check for negative values: a
 /// multiple of the norms' lattice (`norms::LATTICE`, 8; checked there), so
@@ -37,13 +38,19 @@ pub struct Limited {
 pub struct Solution {
     disc: Arc<Discretization>,
     values: Vec<f64>,
+    /// The BVH of [`Solution::eval_at`], built on its first call.
+    locator: OnceLock<Arc<Locator>>,
 }
 
 impl Solution {
     /// Wraps nodal values (length N, ordered like the collocation points).
     pub fn new(disc: Arc<Discretization>, values: Vec<f64>) -> Self {
         assert_eq!(values.len(), disc.len(), "one value per collocation point");
-        Self { disc, values }
+        Self {
+            disc,
+            values,
+            locator: OnceLock::new(),
+        }
     }
 
     /// The discretization.
@@ -159,9 +166,16 @@ impl Solution {
         Some((Solution::new(disc.clone(), values), report))
     }
 
-    /// u_n at a point of S (None when the point is not on the mesh).
+    /// u_n at a point of S (None when the point is not on the mesh, within
+    /// 1e-9 of the element's size: [`Mesh::locate`]'s test), found through a
+    /// BVH over the elements built on the first call ([`Locator`]), so each
+    /// call costs O(log n).
+    ///
+    /// [`Mesh::locate`]: crate::mesh::Mesh::locate
     pub fn eval_at(&self, x: DVec3) -> Option<f64> {
-        let (k, [s, t]) = self.disc.mesh().locate(x)?;
+        let mesh = self.disc.mesh();
+        let locator = self.locator.get_or_init(|| Arc::new(Locator::new(mesh)));
+        let (k, [s, t]) = locator.locate(mesh, x)?;
         Some(self.eval(k, s, t))
     }
 

@@ -7,6 +7,9 @@
 //! theorems 7 and 9 require.
 
 pub mod grading;
+mod locate;
+
+pub use locate::{Located, Locator};
 
 use crate::geometry::{Surface, SurfaceMap};
 use glam::DVec3;
@@ -288,8 +291,9 @@ impl Mesh {
     }
 
     /// Finds the element and (s, t) of a point on S (within `1e-9` of the surface
-    /// relative to the element size), by Gauss–Newton on m_k(s, t) = x over the
-    /// elements whose bounding ball contains x.
+    /// relative to the element size), trying every element whose bounding ball
+    /// contains x: the linear scan that [`Locator`] does through a BVH, kept as
+    /// its reference.
     pub fn locate(&self, x: DVec3) -> Option<(usize, [f64; 2])> {
         let mut best: Option<(usize, [f64; 2], f64)> = None;
         for k in 0..self.len() {
@@ -297,33 +301,42 @@ impl Mesh {
             if (x - c).length() > rad * 1.1 + 1e-12 {
                 continue;
             }
-            let (mut s, mut t) = (1.0 / 3.0, 1.0 / 3.0);
-            for _ in 0..30 {
-                let r = self.position(k, s, t) - x;
-                let (ds, dt) = self.tangents(k, s, t);
-                let (a11, a12, a22) = (ds.dot(ds), ds.dot(dt), dt.dot(dt));
-                let (b1, b2) = (-ds.dot(r), -dt.dot(r));
-                let det = a11 * a22 - a12 * a12;
-                if det <= 0.0 {
-                    break;
-                }
-                let (d1, d2) = ((a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det);
-                s += d1;
-                t += d2;
-                if d1.abs() + d2.abs() < 1e-15 {
-                    break;
-                }
-            }
-            let miss = (self.position(k, s, t) - x).length();
+            let [s, t] = self.project_onto(k, x);
             let eps = 1e-9;
-            if s >= -eps && t >= -eps && s + t <= 1.0 + eps && miss <= 1e-9 * rad.max(1e-300) {
-                let st = [s.clamp(0.0, 1.0), t.clamp(0.0, 1.0)];
-                if best.as_ref().is_none_or(|b| miss < b.2) {
-                    best = Some((k, st, miss));
-                }
+            if !(s >= -eps && t >= -eps && s + t <= 1.0 + eps) {
+                continue;
+            }
+            let st = [s.clamp(0.0, 1.0), t.clamp(0.0, 1.0)];
+            let miss = (self.position(k, st[0], st[1]) - x).length();
+            if miss <= 1e-9 * rad.max(1e-300) && best.as_ref().is_none_or(|b| miss < b.2) {
+                best = Some((k, st, miss));
             }
         }
         best.map(|(k, st, _)| (k, st))
+    }
+
+    /// (s, t) of the point of element `k`'s surface (its map extended beyond
+    /// σ) nearest to `x`, by Gauss–Newton on m_k(s, t) = x from the centroid
+    /// (exact in one step on a flat element); it may lie outside σ.
+    pub fn project_onto(&self, k: usize, x: DVec3) -> [f64; 2] {
+        let (mut s, mut t) = (1.0 / 3.0, 1.0 / 3.0);
+        for _ in 0..30 {
+            let r = self.position(k, s, t) - x;
+            let (ds, dt) = self.tangents(k, s, t);
+            let (a11, a12, a22) = (ds.dot(ds), ds.dot(dt), dt.dot(dt));
+            let (b1, b2) = (-ds.dot(r), -dt.dot(r));
+            let det = a11 * a22 - a12 * a12;
+            if det <= 0.0 {
+                break;
+            }
+            let (d1, d2) = ((a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det);
+            s += d1;
+            t += d2;
+            if d1.abs() + d2.abs() < 1e-15 {
+                break;
+            }
+        }
+        [s, t]
     }
 
     /// Mapped vertices of element `k`.
