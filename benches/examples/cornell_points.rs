@@ -2,7 +2,9 @@
 //! tracer (Mitsuba 3, `tests/data/cornell_points_mitsuba.csv`, its provenance
 //! in `../shared/reference/README.md`), against radcol's estimate of its own
 //! error there: for each point, |u_n/π - reference|, the element's estimated
-//! max error /π and the reference's 3σ, per channel.
+//! max error /π and the reference's 3σ, per channel; and the same for the
+//! iterated solution û_n = E + K u_n at the points (`radcol_core::query`,
+//! what `radcol solve --at` prints).
 //!
 //!     cargo run --release -p radcol-benches --example cornell_points [-- TARGET]
 //!
@@ -11,8 +13,7 @@
 
 use glam::DVec3;
 use radcol_core::assembly::CpuBackend;
-use radcol_core::geometry::barycentric_st;
-use radcol_core::mesh::Mesh;
+use radcol_core::query::{query, QueryPoint, DEFAULT_SNAP};
 use radcol_core::run::adapt::{solve_adaptive, AdaptOptions};
 use radcol_core::run::SolveConfig;
 use radcol_core::scene::builtin;
@@ -48,25 +49,6 @@ fn read_points() -> Vec<RefPoint> {
         .collect()
 }
 
-/// The element holding `x` on its front side `n` (within 0.5 scene units of
-/// its plane, projected onto it), and (s, t) there. The red wall is a
-/// non-planar quadrilateral (its x runs from 549.6 to 556): the reference's
-/// points on it lie on the path tracer's own triangles, a fraction of a
-/// millimetre off radcol's.
-fn find(mesh: &Mesh, x: DVec3, n: DVec3) -> Option<(usize, [f64; 2])> {
-    (0..mesh.len()).find_map(|k| {
-        let [a, b, c] = mesh.vertices(k);
-        let normal = mesh.point(k, 1.0 / 3.0, 1.0 / 3.0).normal;
-        let off_plane = (x - a).dot(normal).abs();
-        if normal.dot(n) < 0.99 || off_plane > 0.5 {
-            return None;
-        }
-        // The reference's coordinates are single precision: project first.
-        let on_plane = x - normal * (x - a).dot(normal);
-        barycentric_st(a, b, c, on_plane).map(|st| (k, st))
-    })
-}
-
 fn main() {
     let target: f64 = std::env::args()
         .nth(1)
@@ -91,39 +73,63 @@ fn main() {
     })
     .expect("solves");
     let out = &res.outcome;
-    let mesh = out.discretization.mesh();
     println!(
         "target {target:.0e}: {:?} with {} unknowns",
         res.stop,
         out.discretization.len()
     );
     println!(
-        "{:<36} {:>3} {:>11} {:>11} {:>10} {:>10} {:>9}",
-        "point", "ch", "radcol", "mitsuba", "|diff|", "estimate", "3 sigma"
+        "{:<36} {:>3} {:>11} {:>11} {:>11} {:>9} {:>9} {:>9} {:>8}",
+        "point",
+        "ch",
+        "u_n/pi",
+        "iterated/pi",
+        "mitsuba",
+        "|u_n-ref|",
+        "|it-ref|",
+        "estimate",
+        "3 sigma"
     );
-    let (mut within, mut total) = (0, 0);
-    for p in read_points() {
-        let Some((k, [s, t])) = find(mesh, p.x, p.n) else {
-            println!("{:<36} not on the mesh", p.label);
-            continue;
-        };
-        for (c, ch) in out.channels.iter().enumerate() {
-            let u = ch.solution.eval(k, s, t) / PI;
-            let est = ch
-                .estimate
-                .as_ref()
-                .map_or(f64::NAN, |e| e.elements[k] / PI);
-            let diff = (u - p.radiance[c]).abs();
+    let refs = read_points();
+    let pts: Vec<QueryPoint> = refs
+        .iter()
+        .map(|p| QueryPoint {
+            position: p.x,
+            normal: Some(p.n),
+        })
+        .collect();
+    let values = query(&scene.problem(), out, cfg.quad.clone(), &pts, DEFAULT_SNAP)
+        .expect("every reference point lies on the scene");
+    let (mut within, mut within_it, mut total) = (0, 0, 0);
+    let (mut rel_u, mut rel_it) = (Vec::new(), Vec::new());
+    for (p, v) in refs.iter().zip(&values) {
+        for (c, (ch, val)) in out.channels.iter().zip(&v.channels).enumerate() {
+            let (u, it) = (val.u / PI, val.iterated / PI);
+            let est = val.estimate.map_or(f64::NAN, |e| e / PI);
+            let (du, dit) = ((u - p.radiance[c]).abs(), (it - p.radiance[c]).abs());
             let sigma3 = 3.0 * p.stderr[c];
             total += 1;
-            if diff <= est + sigma3 {
-                within += 1;
-            }
+            within += usize::from(du <= est + sigma3);
+            within_it += usize::from(dit <= est + sigma3);
+            rel_u.push(du / p.radiance[c]);
+            rel_it.push(dit / p.radiance[c]);
             println!(
-                "{:<36} {:>3} {:>11.4e} {:>11.4e} {:>10.2e} {:>10.2e} {:>9.1e}",
-                p.label, ch.name, u, p.radiance[c], diff, est, sigma3
+                "{:<36} {:>3} {:>11.4e} {:>11.4e} {:>11.4e} {:>9.2e} {:>9.2e} {:>9.2e} {:>8.1e}",
+                p.label, ch.name, u, it, p.radiance[c], du, dit, est, sigma3
             );
         }
     }
-    println!("{within} of {total} values within the element's estimate + 3 sigma of the reference");
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    println!("{within} of {total} values u_n, {within_it} of {total} values û_n within the element's estimate + 3 sigma of the reference");
+    println!(
+        "relative difference to the reference: u_n median {:.2e}, max {:.2e}; û_n median {:.2e}, max {:.2e}",
+        median(&mut rel_u),
+        max(&rel_u),
+        median(&mut rel_it),
+        max(&rel_it)
+    );
 }

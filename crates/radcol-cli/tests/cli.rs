@@ -1719,3 +1719,115 @@ fn verbose_logs_each_stage() {
         &["--verbose", "--quiet"],
     );
 }
+
+/// `--at`: u_n and û_n at the points of a CSV file. On the sphere's closed
+/// form û_n is superconvergent: at points that are not nodes it is far
+/// closer to u than u_n. The reference file's labels and normals are read
+/// by their header names; --at-out writes a row per point and keeps an
+/// existing file; a point off the surface, a bad number and --at-out
+/// without --at are refused with one line naming the file and line.
+#[test]
+fn at_points_gives_u_n_and_the_iterated_solution() {
+    let dir = scratch("at");
+    let pts = dir.join("pts.csv");
+    let p = [[0.6, 0.0, 0.8], [0.0, -0.28, 0.96], [-0.48, 0.6, -0.64]];
+    let text: String = p
+        .iter()
+        .map(|x| format!("{},{},{}\n", x[0], x[1], x[2]))
+        .collect();
+    std::fs::write(&pts, text).unwrap();
+    let a = (0.3f64 * 0.3 + 0.5 * 0.5 + 0.8 * 0.8).sqrt();
+    let c = 2.0 * a.sinh() / a;
+    let exact =
+        |x: &[f64; 3]| (0.3 * x[0] + 0.5 * x[1] + 0.8 * x[2]).exp() + (0.5 + 0.2 * x[0]) * c;
+    let e = "exp(0.3*x + 0.5*y + 0.8*z)";
+    let args = |extra: &[&str]| -> Vec<String> {
+        let mut v: Vec<String> = ["solve", "sphere", "--level", "2", "--rho", "0.5 + 0.2*x"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        v.extend([
+            "--emission".into(),
+            e.into(),
+            "--at".into(),
+            pts.display().to_string(),
+        ]);
+        v.extend(extra.iter().map(|s| s.to_string()));
+        v
+    };
+    let run = |extra: &[&str]| {
+        let v = args(extra);
+        radcol_ok(&v.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    let json = stdout_json(&run(&["--json"]));
+    let points = json["points"]["points"].as_array().expect("points in JSON");
+    assert_eq!(points.len(), 3);
+    let (mut worst_u, mut worst_it) = (0.0f64, 0.0f64);
+    for (x, v) in p.iter().zip(points) {
+        let ch = &v["channels"][0];
+        let u = exact(x);
+        worst_u = worst_u.max((num(ch, "u") - u).abs());
+        worst_it = worst_it.max((num(ch, "iterated") - u).abs());
+        assert!(num(ch, "estimate") > 0.0);
+        assert!(num(v, "distance") < 1e-12);
+    }
+    assert!(
+        worst_it < 1e-5 && worst_it * 100.0 < worst_u,
+        "u_n off by {worst_u:.3e}, û_n by {worst_it:.3e}"
+    );
+    let text = String::from_utf8(run(&[]).stdout).unwrap();
+    assert!(
+        text.contains("points      3 from") && text.contains("line 2"),
+        "{text}"
+    );
+    // --at-out: a header and a row per point; refuses to overwrite.
+    let csv = dir.join("values.csv");
+    let out = run(&["--at-out", csv.to_str().unwrap()]);
+    let written = std::fs::read_to_string(&csv).unwrap();
+    let rows: Vec<&str> = written.lines().collect();
+    assert_eq!(rows[0], "label,x,y,z,element,distance,u,uhat,estimate");
+    assert_eq!(rows.len(), 4);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("wrote the point values to"));
+    let v = args(&["--at-out", csv.to_str().unwrap()]);
+    let refused: Vec<&str> = v.iter().map(String::as_str).collect();
+    assert_one_line_error(&refused, 2, &["already exists", "--force"]);
+    // The path tracer's file, by its header: labels and normals.
+    let reference = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../tests/data/cornell_points_mitsuba.csv"
+    );
+    let out = radcol_ok(&[
+        "solve",
+        "cornell",
+        "--level",
+        "0",
+        "--at",
+        reference,
+        "--no-estimate",
+    ]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.contains("points      14 from") && text.contains("short block, front face"),
+        "{text}"
+    );
+    // Refusals, before any solve.
+    let off = dir.join("off.csv");
+    std::fs::write(&off, "x,y,z\n0.6,0,0.8\n0,0,0\n").unwrap();
+    let off = off.display().to_string();
+    assert_one_line_error(
+        &["solve", "sphere", "--at", &off],
+        2,
+        &[&format!("{off}:3:"), "not on the surface"],
+    );
+    let bad = dir.join("bad.csv");
+    std::fs::write(&bad, "1,0,0\n0,1,zero\n").unwrap();
+    let bad = bad.display().to_string();
+    assert_one_line_error(
+        &["solve", "sphere", "--at", &bad],
+        2,
+        &[&format!("{bad}:2:"), "z = 'zero'"],
+    );
+    let out = radcol(&["solve", "sphere", "--at-out", "x.csv"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--at"));
+}

@@ -329,6 +329,26 @@ pub struct SolveArgs {
     )]
     pub relight: Vec<String>,
 
+    /// Evaluate u_n and the iterated solution û_n = E + K u_n (superconvergent on smooth
+    /// surfaces, shadows clipped exactly) at the points of FILE.csv, with the estimated
+    /// error of their elements: rows x,y,z or x,y,z,nx,ny,nz (the normal picks the face at
+    /// an edge), or a header row naming columns x, y, z [nx, ny, nz] [label]. Points are
+    /// taken onto the surface from up to 1e-3 of the scene's diagonal away. The values are
+    /// in the report (text and JSON), or in --at-out.
+    #[arg(help_heading = "Output", long, value_name = "FILE.csv")]
+    pub at: Option<PathBuf>,
+
+    /// Write the --at values to FILE.csv (a row per point: label, x, y, z, element,
+    /// distance, then u, uhat and estimate per channel) instead of listing them in the text
+    /// report.
+    #[arg(
+        help_heading = "Output",
+        long,
+        value_name = "FILE.csv",
+        requires = "at"
+    )]
+    pub at_out: Option<PathBuf>,
+
     /// Write a PNG map of the estimated error seen by --camera: each element coloured by its
     /// estimated max error relative to max |u| (worst channel), log scale from 1e-6 (dark)
     /// to 1e-1 (bright), a colour bar with a tick per decade along the bottom edge.

@@ -7,6 +7,7 @@ mod compare;
 mod info;
 mod nodes;
 mod operator;
+mod points;
 mod solve;
 mod study;
 mod trust;
@@ -18,6 +19,7 @@ pub use info::{
     ShapeRatio,
 };
 pub use nodes::NodesReport;
+pub use points::{PointChannel, PointLine, PointsReport};
 pub use solve::{SolveReport, Written};
 pub use study::{StudyFooter, StudyHeader, StudyLine, StudyReport};
 pub use trust::untrusted;

@@ -124,6 +124,8 @@ pub struct SolveReport {
     pub adaptive: Option<AdaptReport>,
     /// The --relight sets, solved on the same matrix.
     pub relit: Vec<crate::run::RelitSet>,
+    /// The values at the `--at` points.
+    pub points: Option<super::PointsReport>,
     /// What makes this answer doubtful, and what to change.
     warnings: Vec<String>,
     #[serde(skip)]
@@ -216,6 +218,7 @@ impl SolveReport {
             out: written.to_vec(),
             adaptive: None,
             relit: Vec::new(),
+            points: None,
             contents: scene.map(|sc| SceneSummary {
                 triangles: sc.triangle_count(),
                 materials: sc.materials.len(),
@@ -476,6 +479,9 @@ impl fmt::Display for SolveReport {
         self.fmt_channels(f)?;
         for set in &self.relit {
             write!(f, "{set}")?;
+        }
+        if let Some(p) = &self.points {
+            write!(f, "{p}")?;
         }
         for w in &self.out {
             writeln!(f, "  wrote {} to {} ({})", w.what, w.path, secs(w.seconds))?;

@@ -4,6 +4,7 @@
 
 mod advice;
 mod info;
+mod points;
 mod relight;
 
 pub use relight::RelitSet;
@@ -48,7 +49,19 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
     for o in &job.outputs {
         check_writable(&o.file)?;
     }
+    if let Some(file) = job.at.as_ref().and_then(|a| a.out.as_ref()) {
+        check_writable(file)?;
+        if job.outputs.iter().any(|o| o.file.path == file.path) {
+            let shown = file.path.display();
+            return Err(
+                crate::error::bad_input(format!("--at-out {shown} is also an --out file")).into(),
+            );
+        }
+    }
     let mut s = setup::setup(&job.problem, job.level, job.max_edge, job.adapt.is_some())?;
+    if let Some(at) = &job.at {
+        points::precheck(at, &s)?;
+    }
     let relit = relight::relit_problems(&job.relight, &s)?;
     let look = setup::look(&job.look, &s);
     let bar = progress::Bar::for_stderr();
@@ -78,6 +91,15 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
         }
     };
     let sets = relight::relight_all(job.relight.iter().cloned().zip(relit).collect(), &s, &out)?;
+    let values = match &job.at {
+        Some(at) => {
+            if let Some(b) = &bar {
+                b.spin(format!("values at {} points", at.points.len()));
+            }
+            Some(points::evaluate(at, &s, &out)?)
+        }
+        None => None,
+    };
     let written = output::write_all(&job.outputs, &look, &out, bar.as_ref())?;
     if let Some(b) = bar {
         b.finish();
@@ -89,6 +111,7 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
     let mut report = SolveReport::new(&s, &out, &written);
     report.adaptive = adaptive;
     report.relit = sets;
+    report.points = values;
     report::emit(w, &report, s.json)?;
     if let Some(why) = report::untrusted(&s, &out) {
         return Err(anyhow::anyhow!(why));

@@ -4,8 +4,10 @@
 
 mod mesh;
 mod outputs;
+mod points;
 
 pub use outputs::{LookSpec, Output, OutputFile, OutputKind};
+pub use points::PointsSpec;
 
 use crate::args::{
     BackendArg, Cli, Command, InfoArgs, NodesArgs, OperatorArg, PrecisionArg, ProblemArgs,
@@ -108,6 +110,8 @@ pub struct SolveJob {
     pub strict: bool,
     /// `--relight` sets, solved after the first on its matrix.
     pub relight: Vec<String>,
+    /// `--at`: points to evaluate u_n and û_n at.
+    pub at: Option<Box<PointsSpec>>,
 }
 
 /// `radcol study`.
@@ -212,6 +216,11 @@ fn solve_job(a: SolveArgs) -> Result<SolveJob> {
         adapt,
         strict: a.strict,
         relight: a.relight,
+        at: a
+            .at
+            .as_deref()
+            .map(|p| points::points(p, a.at_out.as_deref(), a.problem.force).map(Box::new))
+            .transpose()?,
     })
 }
 

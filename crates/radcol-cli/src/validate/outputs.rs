@@ -115,7 +115,7 @@ pub(super) fn error_map(path: &Path, force: bool) -> Result<Output, BadInput> {
 
 /// `path` for `flag`, which writes only files ending in `.ext` (`why` says
 /// so in the refusal).
-fn only(
+pub(super) fn only(
     flag: &'static str,
     ext: &str,
     path: &Path,
