@@ -80,8 +80,10 @@ pub fn write_all(
                         let errors = element_estimates(out).map(|e| vertex_values(vm, &e));
                         export::ply::write(&mut f, vm, &names, &look.tone, errors.as_deref())
                     }
-                    OutputKind::Glb => export::gltf::write_glb(&mut f, vm, &look.tone),
-                    _ => export::gltf::write_gltf(&mut f, vm, &look.tone),
+                    OutputKind::Glb => {
+                        export::gltf::write_glb(&mut f, vm, &look.tone, &layout(mesh, look))
+                    }
+                    _ => export::gltf::write_gltf(&mut f, vm, &look.tone, &layout(mesh, look)),
                 }
                 .and_then(|_| Ok(f.flush()?))
                 .with_context(|| format!("writing {path}"))?;
@@ -99,6 +101,37 @@ pub fn write_all(
         });
     }
     Ok(written)
+}
+
+/// The glTF nodes: with a scene, one per object (the patch name's group, the
+/// part before '/'), in the order they first appear; else one.
+fn layout(mesh: &radcol_core::mesh::Mesh, look: &Look) -> export::gltf::Layout {
+    let mut layout = export::gltf::Layout::single(&look.scene, mesh.len());
+    layout.metres_per_unit = look.metres_per_unit;
+    if !look.objects {
+        return layout;
+    }
+    layout.objects.clear();
+    let patches = &mesh.surface().patches;
+    let object_of_patch: Vec<u32> = patches
+        .iter()
+        .map(|p| {
+            let group = p.name.split('/').next().unwrap_or(&p.name).to_string();
+            match layout.objects.iter().position(|o| *o == group) {
+                Some(i) => i as u32,
+                None => {
+                    layout.objects.push(group);
+                    (layout.objects.len() - 1) as u32
+                }
+            }
+        })
+        .collect();
+    layout.object_of_element = mesh
+        .elements()
+        .iter()
+        .map(|e| object_of_patch[e.patch as usize])
+        .collect();
+    layout
 }
 
 /// The `--error-map` PNG: every element's estimate relative to max |u_n|

@@ -227,6 +227,14 @@ pub struct Look {
     pub tone: ToneMap,
     /// Triangles per element edge of vertex meshes.
     pub tessellation: u32,
+    /// The scene's name (the glTF root node's).
+    pub scene: String,
+    /// Metres per scene unit (the glTF root node's scale): --units, else
+    /// the scene's own, else 1.
+    pub metres_per_unit: f64,
+    /// Whether the surface is a scene whose objects (OBJ groups, glTF
+    /// nodes) become glTF nodes of their own.
+    pub objects: bool,
 }
 
 /// The look of `spec` for the scene and degree of `s`.
@@ -238,6 +246,12 @@ pub fn look(spec: &LookSpec, s: &Setup) -> Look {
         render: spec.render,
         tone: spec.tone,
         tessellation: spec.tessellation.unwrap_or(s.cfg.degree.max(1) as u32),
+        scene: s.scene.clone(),
+        metres_per_unit: spec
+            .metres_per_unit
+            .or_else(|| s.loaded.scene().and_then(|sc| sc.metres_per_unit))
+            .unwrap_or(1.0),
+        objects: s.loaded.scene().is_some(),
     }
 }
 

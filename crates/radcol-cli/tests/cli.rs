@@ -603,12 +603,36 @@ fn solve_cornell_writes_every_output() {
         assert!(u.iter().all(|x| x.is_finite()));
     }
 
-    // glTF, binary and embedded: the same vertex count.
+    // glTF, binary and embedded: the same vertex count, over a node per OBJ
+    // group under a root that scales the box's millimetres to metres; every
+    // primitive unlit (baked light is not lit again).
     for p in &paths[3..5] {
         let (doc, buffers, _) = gltf::import(p).unwrap();
-        let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
-        let reader = prim.reader(|b| Some(&buffers[b.index()]));
-        assert_eq!(reader.read_positions().unwrap().count(), 3 * elements);
+        let root = doc.scenes().next().unwrap().nodes().next().unwrap();
+        assert_eq!(root.name(), Some("cornell"));
+        assert_eq!(root.transform().decomposed().2, [1e-3; 3]);
+        let names: Vec<&str> = root.children().filter_map(|n| n.name()).collect();
+        assert_eq!(
+            names,
+            [
+                "floor",
+                "ceiling",
+                "light",
+                "back_wall",
+                "right_wall",
+                "left_wall",
+                "short_block",
+                "tall_block"
+            ]
+        );
+        let mut vertices = 0;
+        for node in root.children() {
+            let prim = node.mesh().unwrap().primitives().next().unwrap();
+            assert!(prim.material().unlit());
+            let reader = prim.reader(|b| Some(&buffers[b.index()]));
+            vertices += reader.read_positions().unwrap().count();
+        }
+        assert_eq!(vertices, 3 * elements);
     }
 
     // CSV: one row per collocation node, one column per channel.
@@ -1830,4 +1854,35 @@ fn at_points_gives_u_n_and_the_iterated_solution() {
     let out = radcol(&["solve", "sphere", "--at-out", "x.csv"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--at"));
+}
+
+/// `--units` sets the glTF root node's scale (metres per scene unit); a
+/// surface that is not a scene is one node; bad units are refused.
+#[test]
+fn units_scale_the_gltf_root() {
+    let dir = scratch("units");
+    let glb = dir.join("s.glb");
+    let p = glb.to_str().unwrap();
+    radcol_ok(&[
+        "solve",
+        "sphere",
+        "--level",
+        "0",
+        "--no-estimate",
+        "-o",
+        p,
+        "--units",
+        "ft",
+    ]);
+    let (doc, _, _) = gltf::import(&glb).unwrap();
+    let root = doc.scenes().next().unwrap().nodes().next().unwrap();
+    assert_eq!(root.transform().decomposed().2, [0.3048f32; 3]);
+    assert_eq!(root.children().count(), 1);
+    for bad in ["0", "parsec", "-1", "nan"] {
+        assert_one_line_error(
+            &["solve", "sphere", "-o", p, "--force", "--units", bad],
+            2,
+            &["--units"],
+        );
+    }
 }

@@ -30,6 +30,7 @@ const LAYERS: &[&str] = &[
     "norms",
     "estimate",
     "run",
+    "query",
     "study",
     "render",
     "scene",

@@ -405,6 +405,17 @@ pub struct SolveArgs {
     #[arg(help_heading = "Image", long, value_enum, default_value_t = TonemapArg::Aces)]
     pub tonemap: TonemapArg,
 
+    /// The scene's unit, for .glb/.gltf (whose unit is the metre): mm, cm, m, km, in, ft or
+    /// metres per unit; the root node scales the positions, which stay in the input's units
+    /// [default: the scene's own (glTF input: m; the built-in Cornell box: mm), else m].
+    #[arg(
+        help_heading = "Output",
+        long,
+        value_name = "UNIT",
+        allow_hyphen_values = true
+    )]
+    pub units: Option<String>,
+
     /// Triangles per element edge in .ply/.glb/.gltf (N² per element), so that degree-r
     /// polynomials show inside elements [default: max(r, 1)].
     #[arg(help_heading = "Image", long, value_name = "N")]

@@ -28,8 +28,10 @@ use radcol_core::solve::GmresParams;
 use radcol_gpu::{BackendChoice, Precision};
 use std::ops::RangeInclusive;
 
-/// A validated command.
+/// A validated command. There is one per run, so its variants' sizes do
+/// not matter.
 #[derive(Debug)]
+#[allow(clippy::large_enum_variant)]
 pub enum Config {
     /// `radcol solve`.
     Solve(SolveJob),
@@ -111,7 +113,7 @@ pub struct SolveJob {
     /// `--relight` sets, solved after the first on its matrix.
     pub relight: Vec<String>,
     /// `--at`: points to evaluate u_n and û_n at.
-    pub at: Option<Box<PointsSpec>>,
+    pub at: Option<PointsSpec>,
 }
 
 /// `radcol study`.
@@ -219,7 +221,7 @@ fn solve_job(a: SolveArgs) -> Result<SolveJob> {
         at: a
             .at
             .as_deref()
-            .map(|p| points::points(p, a.at_out.as_deref(), a.problem.force).map(Box::new))
+            .map(|p| points::points(p, a.at_out.as_deref(), a.problem.force))
             .transpose()?,
     })
 }

@@ -75,6 +75,32 @@ pub struct LookSpec {
     pub tone: ToneMap,
     /// Triangles per element edge of vertex meshes; None: max(r, 1).
     pub tessellation: Option<u32>,
+    /// --units: metres per scene unit, when given.
+    pub metres_per_unit: Option<f64>,
+}
+
+/// `--units`: a unit's name or metres per scene unit.
+fn units(text: &str) -> Result<f64, BadInput> {
+    let named = [
+        ("mm", 1e-3),
+        ("cm", 1e-2),
+        ("m", 1.0),
+        ("km", 1e3),
+        ("in", 0.0254),
+        ("ft", 0.3048),
+    ];
+    if let Some(&(_, v)) = named
+        .iter()
+        .find(|(n, _)| n.eq_ignore_ascii_case(text.trim()))
+    {
+        return Ok(v);
+    }
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(bad_input(format!(
+            "--units {text}: give mm, cm, m, km, in, ft or metres per scene unit (a positive number)"
+        ))),
+    }
 }
 
 /// An `--out` path: its kind from the extension.
@@ -197,6 +223,7 @@ pub(super) fn look(a: &SolveArgs) -> Result<LookSpec, BadInput> {
             ..parse_exposure(&a.exposure)?
         },
         tessellation: a.tessellation,
+        metres_per_unit: a.units.as_deref().map(units).transpose()?,
     })
 }
 

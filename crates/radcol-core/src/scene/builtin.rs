@@ -32,6 +32,9 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
 /// The built-in scene `name` (see [`BUILTIN_SCENES`]), or None when there is
 /// none of that name.
 pub fn builtin(name: &str) -> Option<Result<Scene, SceneError>> {
+    // Metres per unit: the Cornell box's data are millimetres, the rooms'
+    // metres; the shadow and plates scenes are unitless (taken as metres).
+    let metres = if name == "cornell" { 1e-3 } else { 1.0 };
     let (obj, mtl_name, mtl, camera) = match name {
         "cornell" => (
             include_str!("../../../../scenes/cornell.obj"),
@@ -104,6 +107,7 @@ pub fn builtin(name: &str) -> Option<Result<Scene, SceneError>> {
                 message,
             })?;
             scene.camera = Some(camera);
+            scene.metres_per_unit = Some(metres);
             Ok(scene)
         }),
     )

@@ -57,6 +57,7 @@ pub fn load_gltf(path: &Path) -> Result<Scene, SceneError> {
         .unwrap_or_else(|| "scene".into());
     let mut scene = build(&name, &path.display().to_string(), &document, &buffers)?;
     scene.source = Some(path.to_path_buf());
+    scene.metres_per_unit = Some(1.0);
     Ok(scene)
 }
 

@@ -256,6 +256,9 @@ pub struct Scene {
     /// Contact lines imprinted on the faces they rest on ([`imprint`]); the
     /// triangle count of the scene includes the pieces.
     pub imprinted: Imprinted,
+    /// Metres per scene unit, when known: glTF input is in metres (1), the
+    /// built-in Cornell box in millimetres (0.001); OBJ files do not say.
+    pub metres_per_unit: Option<f64>,
 }
 
 impl Scene {

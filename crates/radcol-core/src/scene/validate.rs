@@ -172,6 +172,7 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
         warnings,
         source,
         imprinted,
+        metres_per_unit: None,
     })
 }
 
