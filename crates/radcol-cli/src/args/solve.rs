@@ -1,0 +1,174 @@
+//! `radcol solve`'s own arguments (the problem's are [`super::ProblemArgs`]).
+
+use super::{ProblemArgs, TonemapArg};
+use clap::Args;
+use std::path::PathBuf;
+
+/// `radcol solve`.
+#[derive(Debug, Args)]
+pub struct SolveArgs {
+    #[command(flatten)]
+    pub problem: ProblemArgs,
+
+    /// Refinement level: each level splits every triangle into 4 (8 elements at level 0 on
+    /// a sphere or ellipsoid, 12 on a box, the file's triangles for a scene) [default: 2;
+    /// 0 with --max-edge; for a scene with materials given neither --level nor --max-edge:
+    /// level 0 and --max-edge a tenth of its bounding box's diagonal].
+    #[arg(help_heading = "Mesh", long, short = 'l', value_name = "L")]
+    pub level: Option<u32>,
+
+    /// After the uniform --level (0 when --level is not given), keep splitting elements 4:1
+    /// until no edge is longer than H (scene units) [default: uniform refinement only, but
+    /// see --level].
+    #[arg(
+        help_heading = "Mesh",
+        long,
+        value_name = "H",
+        allow_hyphen_values = true
+    )]
+    pub max_edge: Option<f64>,
+
+    /// Refine adaptively until the estimated max error relative to max |u| is at most TOL
+    /// (in (0, 1)): elements whose estimate is large are split 4:1 and the problem
+    /// re-solved, starting from --level/--max-edge (a scene with materials given neither:
+    /// its own triangles). Where the error stops falling under refinement (three splits in
+    /// a row that leave an element's estimate above 0.7 of its parent's: the foot of a
+    /// block's corner on a floor), or below 1e-5 of the scene's diagonal, elements are no
+    /// longer split; the loop then stops when the rest is below TOL and names those points
+    /// [default: uniform refinement only].
+    #[arg(
+        help_heading = "Accuracy",
+        long,
+        value_name = "TOL",
+        allow_hyphen_values = true
+    )]
+    pub target_error: Option<f64>,
+
+    /// With --target-error: never solve with more unknowns than N [default: what the
+    /// dense matrix's memory allows].
+    #[arg(
+        help_heading = "Accuracy",
+        long,
+        value_name = "N",
+        requires = "target_error"
+    )]
+    pub max_unknowns: Option<u64>,
+
+    /// With --target-error: fail (exit 1, outputs still written) when the target is not
+    /// reached within the budget (a stop where only the neighbourhoods of the singular
+    /// points the report names are above it counts as reached).
+    #[arg(help_heading = "Accuracy", long, requires = "target_error")]
+    pub strict: bool,
+
+    /// Write results; repeat for several files. By extension: .csv (one row per collocation
+    /// node: element,node,x,y,z,u…), .ply and .glb/.gltf (per-vertex radiosity on a
+    /// tessellation of every element), .png (tone-mapped image) or .exr (linear radiance u/π)
+    /// seen by --camera. Refuses to overwrite without --force.
+    #[arg(help_heading = "Output", long, short = 'o', value_name = "FILE")]
+    pub out: Vec<PathBuf>,
+
+    /// After the solve, solve again on the same matrix (no reassembly) for new lights or
+    /// materials, and report each set's ∫u and solve time; repeat for several sets. For a
+    /// scene: ';'-separated NAME=R,G,B or NAME.Ke=R,G,B (emission of material NAME) and
+    /// NAME.Kd=R,G,B (its reflectance); for a surface: a new emission expression. The
+    /// --out files show the first solve.
+    #[arg(
+        help_heading = "Problem",
+        long,
+        value_name = "SPEC",
+        allow_hyphen_values = true
+    )]
+    pub relight: Vec<String>,
+
+    /// Evaluate u_n and the iterated solution û_n = E + K u_n (superconvergent on smooth
+    /// surfaces, shadows clipped exactly) at the points of FILE.csv, with the estimated
+    /// error of their elements: rows x,y,z or x,y,z,nx,ny,nz (the normal picks the face at
+    /// an edge), or a header row naming columns x, y, z [nx, ny, nz] [label]. Points are
+    /// taken onto the surface from up to 1e-3 of the scene's diagonal away. The values are
+    /// in the report (text and JSON), or in --at-out.
+    #[arg(help_heading = "Output", long, value_name = "FILE.csv")]
+    pub at: Option<PathBuf>,
+
+    /// Write the --at values to FILE.csv (a row per point: label, x, y, z, element,
+    /// distance, then u, uhat and estimate per channel) instead of listing them in the text
+    /// report.
+    #[arg(
+        help_heading = "Output",
+        long,
+        value_name = "FILE.csv",
+        requires = "at"
+    )]
+    pub at_out: Option<PathBuf>,
+
+    /// Write a PNG map of the estimated error seen by --camera: each element coloured by its
+    /// estimated max error relative to max |u| (worst channel), log scale from 1e-6 (dark)
+    /// to 1e-1 (bright), a colour bar with a tick per decade along the bottom edge.
+    #[arg(help_heading = "Output", long, value_name = "FILE.png")]
+    pub error_map: Option<PathBuf>,
+
+    /// Camera for .png/.exr as ex,ey,ez,tx,ty,tz,ux,uy,uz,fov: eye, target, up vector and
+    /// vertical field of view in degrees [default: the scene's camera, else one looking at
+    /// the whole scene along +z].
+    #[arg(
+        help_heading = "Image",
+        long,
+        value_name = "EYE,TARGET,UP,FOV",
+        allow_hyphen_values = true
+    )]
+    pub camera: Option<String>,
+
+    /// Image width in pixels.
+    #[arg(help_heading = "Image", long, value_name = "PX", default_value_t = 640)]
+    pub width: u32,
+
+    /// Image height in pixels.
+    #[arg(help_heading = "Image", long, value_name = "PX", default_value_t = 480)]
+    pub height: u32,
+
+    /// Rays (samples) per pixel: a square count on a regular grid, any other
+    /// on a low-discrepancy set [default: 4]
+    #[arg(
+        help_heading = "Image",
+        long,
+        value_name = "N",
+        conflicts_with = "samples"
+    )]
+    pub spp: Option<u32>,
+
+    /// Rays per pixel axis, kept with its old meaning: N² rays per pixel on a
+    /// regular grid, the same as --spp N²
+    #[arg(help_heading = "Image", long, value_name = "N")]
+    pub samples: Option<u32>,
+
+    /// Exposure for 8-bit outputs: `auto` (the 99th luminance percentile maps to white),
+    /// `auto+S` / `auto-S` (auto, then S stops brighter/darker), or S stops applied to the
+    /// radiance as is.
+    #[arg(
+        help_heading = "Image",
+        long,
+        value_name = "auto|S",
+        default_value = "auto",
+        allow_hyphen_values = true
+    )]
+    pub exposure: String,
+
+    /// Tone curve for 8-bit outputs.
+    #[arg(help_heading = "Image", long, value_enum, default_value_t = TonemapArg::Aces)]
+    pub tonemap: TonemapArg,
+
+    /// The scene's unit, for .glb/.gltf (whose unit is the metre): mm, cm, m, km, in, ft or
+    /// metres per unit; the root node scales the positions, which stay in the input's units
+    /// [default: the scene's own (glTF input: m; the built-in Cornell box: mm), else m].
+    #[arg(
+        help_heading = "Output",
+        long,
+        value_name = "UNIT",
+        allow_hyphen_values = true
+    )]
+    pub units: Option<String>,
+
+    /// Triangles per element edge in .ply/.glb/.gltf (N² per element), so that degree-r
+    /// polynomials show inside elements [default: max(r, 1)].
+    #[arg(help_heading = "Image", long, value_name = "N")]
+    pub tessellation: Option<u32>,
+}
