@@ -20,6 +20,7 @@ mod gpu_solve;
 mod hmatrix;
 mod house;
 mod operator;
+mod progress;
 mod query;
 mod relight;
 mod reuse;

@@ -123,7 +123,7 @@ impl Progress for Bar {
     fn start(&self, stage: &str, total: u64) {
         let unit = match stage {
             "plan" | "assembly" | "estimate" => "row blocks",
-            "solve" => "channels",
+            "solve" => "residual decades",
             _ => "",
         };
         let counted = if unit.is_empty() {

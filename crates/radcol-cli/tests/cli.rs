@@ -1705,7 +1705,7 @@ fn verbose_logs_each_stage() {
     for stage in [
         "s  plan (",
         "s  assembly (",
-        "s  solve (1 channels)",
+        "s  solve (12 residual decades)",
         "s  estimate (32 row blocks) (solve: ",
         "s  done (estimate: ",
     ] {

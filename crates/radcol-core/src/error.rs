@@ -285,4 +285,24 @@ pub enum Error {
         /// The backend's own typed error.
         source: Box<dyn std::error::Error + Send + Sync>,
     },
+    /// The progress observer asked for the solve to stop
+    /// ([`crate::progress::Progress::cancelled`]).
+    #[error("cancelled during the {stage}")]
+    Cancelled {
+        /// The stage that noticed: "plan", "assembly", "solve", "estimate".
+        stage: &'static str,
+    },
+}
+
+impl Error {
+    /// [`Error::Cancelled`] in `stage` when `progress` asks for it.
+    pub(crate) fn if_cancelled(
+        progress: Option<&crate::progress::ProgressHandle>,
+        stage: &'static str,
+    ) -> Result<(), Error> {
+        match progress {
+            Some(p) if p.cancelled() => Err(Error::Cancelled { stage }),
+            _ => Ok(()),
+        }
+    }
 }

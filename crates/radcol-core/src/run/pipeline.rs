@@ -105,6 +105,7 @@ fn assemble(
         )
         .with_matrix(matrix_bytes)
     };
+    Error::if_cancelled(cfg.progress.as_ref(), "plan")?;
     let mut memory = settle(&mut decision, disc, cfg, &predict)?;
     let compressed = decision.kind == OperatorKind::Compressed;
     if let Some(p) = &cfg.progress {
@@ -192,6 +193,7 @@ fn estimate_channels(
     let Some(first) = channels.first() else {
         return Ok((None, None));
     };
+    Error::if_cancelled(cfg.progress.as_ref(), "solve")?;
     let disc = first.solution.discretization();
     // A stage of its own (about as long as the assembly), counted in the
     // row blocks it fills, reported when it ends.
@@ -336,6 +338,7 @@ impl Stages<'_> {
             self.keep_check,
         )?;
         let assembly_s = t.elapsed().as_secs_f64();
+        Error::if_cancelled(cfg.progress.as_ref(), "assembly")?;
 
         let t = Instant::now();
         let mut channels = Relighter::over(disc.clone(), &built.operator, cfg)
@@ -362,6 +365,7 @@ impl Stages<'_> {
             (None, None)
         };
         let estimate_s = t.elapsed().as_secs_f64();
+        Error::if_cancelled(cfg.progress.as_ref(), "estimate")?;
         if cfg.limit_negative {
             channels.iter_mut().for_each(limit_negative);
         }

@@ -12,8 +12,10 @@ use crate::discretization::Discretization;
 use crate::error::{Error, InputError};
 use crate::norms::error_norms;
 use crate::problem::Problem;
+use crate::progress::solve_decades;
 use crate::solution::{integrate_nodal, Solution};
-use crate::solve::{gmres, DenseLu, ImplicitRadiosity, LinearOperator, RadiosityOperator};
+use crate::solve::{gmres_observed, DenseLu, ImplicitRadiosity, LinearOperator, RadiosityOperator};
+use std::ops::ControlFlow;
 use std::sync::Arc;
 
 /// An assembled operator kept to solve again: (I - diag ρ Gm) u = E for any
@@ -105,8 +107,9 @@ impl<'a> Relighter<'a> {
         let mut channels = Vec::new();
         let cfg = &self.cfg;
         let lu_cache = &mut self.lu;
+        let decades = solve_decades(cfg.gmres.rel_tol);
         if let Some(p) = &cfg.progress {
-            p.start("solve", problem.channels.len() as u64);
+            p.start("solve", problem.channels.len() as u64 * decades);
         }
         for (c, (ch, (rho, emission))) in problem.channels.iter().zip(fields).enumerate() {
             let mut x = match guess.and_then(|g| g.get(c)) {
@@ -128,7 +131,7 @@ impl<'a> Relighter<'a> {
             };
             let (iterations, growth, condition, at_rounding_floor) = match cfg.solver {
                 SolverKind::Gmres => {
-                    let info = gmres(op, &emission, &mut x, &cfg.gmres)?;
+                    let info = gmres_watched(op, &emission, &mut x, cfg, decades)?;
                     (
                         info.iterations,
                         Some(info.growth),
@@ -137,6 +140,7 @@ impl<'a> Relighter<'a> {
                     )
                 }
                 SolverKind::Lu => {
+                    Error::if_cancelled(cfg.progress.as_ref(), "solve")?;
                     let Some(gm) = self.operator.dense() else {
                         return Err(InputError::CompressedLu.into());
                     };
@@ -150,6 +154,9 @@ impl<'a> Relighter<'a> {
                     }
                     let (_, lu, kappa) = lu_cache.as_ref().expect("just built");
                     lu.solve_in_place(&mut x)?;
+                    if let Some(p) = &cfg.progress {
+                        p.advance(decades);
+                    }
                     (0, None, Some(*kappa), false)
                 }
             };
@@ -178,10 +185,48 @@ impl<'a> Relighter<'a> {
                 estimate: None,
                 limited: None,
             });
-            if let Some(p) = &cfg.progress {
-                p.advance(1);
-            }
         }
         Ok(channels)
+    }
+}
+
+/// GMRES on one channel, reporting each decade its residual falls to
+/// `cfg.progress` (`decades` per channel in all) and stopping when it asks.
+fn gmres_watched(
+    op: &dyn LinearOperator,
+    b: &[f64],
+    x: &mut [f64],
+    cfg: &SolveConfig,
+    decades: u64,
+) -> Result<crate::solve::GmresInfo, Error> {
+    let progress = cfg.progress.as_ref();
+    let mut shown = 0u64;
+    let result = gmres_observed(op, b, x, &cfg.gmres, &mut |_, residual| {
+        let Some(p) = progress else {
+            return ControlFlow::Continue(());
+        };
+        let reached = if residual > 0.0 {
+            ((-residual.log10()).floor().max(0.0) as u64).min(decades)
+        } else {
+            decades
+        };
+        if reached > shown {
+            p.advance(reached - shown);
+            shown = reached;
+        }
+        if p.cancelled() {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    });
+    // A converged channel counts all its decades (GMRES may stop short of
+    // the last one at the rounding floor, or pass several in one step).
+    if let (Some(p), Ok(_)) = (progress, &result) {
+        p.advance(decades - shown);
+    }
+    match result {
+        Err(crate::solve::SolveError::Stopped { .. }) => Err(Error::Cancelled { stage: "solve" }),
+        r => Ok(r?),
     }
 }

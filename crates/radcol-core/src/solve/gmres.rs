@@ -16,6 +16,7 @@
 
 use super::{all_finite, max_abs, unscale, LinearOperator, SolveError};
 use crate::matrix::dot;
+use std::ops::ControlFlow;
 
 /// Options for [`gmres`].
 #[derive(Clone, Debug)]
@@ -97,6 +98,21 @@ pub fn gmres(
     x: &mut [f64],
     params: &GmresParams,
 ) -> Result<GmresInfo, SolveError> {
+    gmres_observed(op, b, x, params, &mut |_, _| ControlFlow::Continue(()))
+}
+
+/// [`gmres`], calling `observe(iterations, residual)` after every iteration
+/// with the Arnoldi estimate of the relative residual (the true one is
+/// checked at each restart, as in [`gmres`]); `ControlFlow::Break` stops the
+/// iteration with [`SolveError::Stopped`], `x` holding the start of the
+/// cycle (progress bars, cancellation).
+pub fn gmres_observed(
+    op: &dyn LinearOperator,
+    b: &[f64],
+    x: &mut [f64],
+    params: &GmresParams,
+    observe: &mut dyn FnMut(usize, f64) -> ControlFlow<()>,
+) -> Result<GmresInfo, SolveError> {
     let n = op.dim();
     for len in [b.len(), x.len()] {
         if len != n {
@@ -122,7 +138,7 @@ pub fn gmres(
     }
     let b: Vec<f64> = b.iter().map(|v| v / scale).collect();
     x.iter_mut().for_each(|v| *v /= scale);
-    let info = cycles(op, &b, x, params);
+    let info = cycles(op, &b, x, params, observe);
     unscale(x, scale)?;
     info
 }
@@ -133,6 +149,7 @@ fn cycles(
     b: &[f64],
     x: &mut [f64],
     params: &GmresParams,
+    observe: &mut dyn FnMut(usize, f64) -> ControlFlow<()>,
 ) -> Result<GmresInfo, SolveError> {
     let n = op.dim();
     let b_norm = dot(b, b).sqrt();
@@ -204,6 +221,9 @@ fn cycles(
                 break;
             }
             k = j + 1;
+            if observe(iterations, g[j + 1].abs() / b_norm).is_break() {
+                return Err(SolveError::Stopped { iterations });
+            }
 
             if g[j + 1].abs() <= tol.max(floor) || h_next == 0.0 {
                 break;
@@ -326,6 +346,46 @@ mod tests {
             }
         }
         DenseMatrix::from_row_major(n, n, a)
+    }
+
+    /// The observer sees every iteration with a non-increasing residual
+    /// estimate (within a restart cycle), the same answer as `gmres`, and
+    /// stops the iteration when it breaks.
+    #[test]
+    fn observer_sees_each_iteration_and_can_stop() {
+        let n = 120;
+        let a = nonnormal(n);
+        let b = ref_matvec(&a, &x_true(n));
+        let params = GmresParams {
+            restart: 200,
+            ..GmresParams::default()
+        };
+        let mut seen = Vec::new();
+        let mut x = vec![0.0; n];
+        let info = gmres_observed(&a, &b, &mut x, &params, &mut |i, r| {
+            seen.push((i, r));
+            ControlFlow::Continue(())
+        })
+        .unwrap();
+        let mut y = vec![0.0; n];
+        let plain = gmres(&a, &b, &mut y, &params).unwrap();
+        assert_eq!((info.iterations, x), (plain.iterations, y));
+        assert_eq!(seen.len(), info.iterations);
+        assert!(seen
+            .windows(2)
+            .all(|w| w[1].0 == w[0].0 + 1 && w[1].1 <= w[0].1));
+        let mut x = vec![0.0; n];
+        let stopped = gmres_observed(&a, &b, &mut x, &params, &mut |i, _| {
+            if i == 3 {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
+        });
+        assert!(matches!(
+            stopped,
+            Err(SolveError::Stopped { iterations: 3 })
+        ));
     }
 
     #[test]

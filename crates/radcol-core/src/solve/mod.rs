@@ -13,7 +13,7 @@
 mod gmres;
 mod lu;
 
-pub use gmres::{gmres, GmresInfo, GmresParams, ROUNDING_FLOOR};
+pub use gmres::{gmres, gmres_observed, GmresInfo, GmresParams, ROUNDING_FLOOR};
 pub use lu::DenseLu;
 
 use crate::matrix::{dot, DenseMatrix};
@@ -208,6 +208,12 @@ pub enum SolveError {
     /// output contained NaN or infinity.
     #[error("input or operator output contains NaN or infinity")]
     NonFinite,
+    /// The observer of [`gmres_observed`] stopped the iteration.
+    #[error("stopped by the caller after {iterations} iterations")]
+    Stopped {
+        /// Iterations performed.
+        iterations: usize,
+    },
     /// The solution is larger than the largest f64, although the system
     /// was solved (on a right-hand side scaled to 1).
     #[error(

@@ -81,6 +81,11 @@ impl AssemblyPlan {
     /// [`AssemblyPlan::at_points`] plan; length rows · N, row-major). Returns
     /// kernel evaluations.
     pub fn fill_block(&self, kp: usize, block: &mut [f64], mode: FillMode) -> u64 {
+        // A cancelled solve skips the rest: the pipeline then returns
+        // `Error::Cancelled` instead of this matrix.
+        if self.progress.as_ref().is_some_and(|p| p.cancelled()) {
+            return 0;
+        }
         let n = self.disc.mesh().len();
         let f = self.disc.nodes_per_element();
         let f_rows = self.rows().nodes_per_element();

@@ -353,6 +353,11 @@ fn classify_all(
     let rows: Vec<(Vec<u8>, PartialRow)> = (0..n)
         .into_par_iter()
         .map(|kp| {
+            // A cancelled solve classifies nothing more (all culled): the
+            // pipeline returns `Error::Cancelled` once the plan is built.
+            if progress.as_ref().is_some_and(|p| p.cancelled()) {
+                return (vec![0u8; n], PartialRow::default());
+            }
             let block = &pts[kp * f..(kp + 1) * f];
             // The previous plan's row of this element, when it is unchanged.
             let old = prev.and_then(|(p, u)| u.old(kp).map(|op| (p, u, op)));
