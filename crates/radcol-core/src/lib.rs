@@ -16,7 +16,14 @@
 //! For graphics: triangle scenes with materials from OBJ files, vertex buffers
 //! or the built-ins ([`scene`]), occlusion where the geometry needs it
 //! ([`visibility`]: exact clipping of partly hidden elements), and images and
-//! per-vertex colours of the solution ([`render`], [`camera`]).
+//! per-vertex colours of the solution ([`render`], [`camera`]), and the
+//! solution at any point ([`query`]).
+//!
+//! An embedding program needs one import, [`prelude`], with one error type
+//! ([`prelude::Error`]) that every fallible call converts into; the
+//! `bake` example (`cargo run --release -p radcol-core --example bake`)
+//! solves a scene file adaptively, reads its light back at points and
+//! writes an image through it.
 //!
 //! ```
 //! use radcol_core::assembly::CpuBackend;
@@ -39,10 +46,7 @@
 //! A scene with occlusion, solved in three colour channels and rendered:
 //!
 //! ```
-//! use radcol_core::assembly::CpuBackend;
-//! use radcol_core::render::{render, tone_map, RenderOptions, ToneMap};
-//! use radcol_core::run::{solve, SolveConfig};
-//! use radcol_core::scene::builtin;
+//! use radcol_core::prelude::*;
 //!
 //! let scene = builtin("cornell").expect("a built-in scene")?;
 //! let config = SolveConfig { degree: 0, level: 0, ..Default::default() };
@@ -53,7 +57,7 @@
 //! let image = render(outcome.discretization.mesh(), &rgb, &scene.camera_or_auto(), &options)?;
 //! let pixels: Vec<[u8; 3]> = tone_map(&image, &ToneMap::default());
 //! assert_eq!(pixels.len(), 64 * 48);
-//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! # Ok::<(), radcol_core::prelude::Error>(())
 //! ```
 #![warn(missing_docs)]
 
@@ -72,6 +76,7 @@ pub mod matrix;
 pub mod mesh;
 pub mod nodes;
 pub mod norms;
+pub mod prelude;
 pub mod problem;
 pub mod progress;
 pub mod quadrature;

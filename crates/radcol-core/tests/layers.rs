@@ -34,6 +34,7 @@ const LAYERS: &[&str] = &[
     "study",
     "render",
     "scene",
+    "prelude",
 ];
 
 fn rank(module: &str) -> Option<usize> {

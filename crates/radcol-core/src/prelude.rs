@@ -1,0 +1,78 @@
+//! The facade for embedding programs: what a scene-to-solution program
+//! needs, in one `use radcol_core::prelude::*;`, with one error type,
+//! [`Error`], that every fallible call here converts into with `?`.
+//!
+//! ```
+//! use radcol_core::prelude::*;
+//!
+//! let scene = builtin("cornell").expect("a built-in scene")?;
+//! let config = SolveConfig { degree: 1, level: 0, ..Default::default() };
+//! let outcome = solve(&scene.problem(), &config, &CpuBackend)?;
+//! let at = [QueryPoint { position: glam::DVec3::new(278.0, 0.0, 280.0), normal: None }];
+//! let values = query(&scene.problem(), &outcome, config.quad.clone(), &at, DEFAULT_SNAP)?;
+//! assert!(values[0].channels.iter().all(|c| c.iterated > 0.0));
+//! let shown: Vec<&Solution> = outcome.channels.iter().map(|c| c.shown()).collect();
+//! let options = RenderOptions { width: 32, height: 24, ..Default::default() };
+//! let image = render(outcome.discretization.mesh(), &shown, &scene.camera_or_auto(), &options)?;
+//! assert_eq!(tone_map(&image, &ToneMap::default()).len(), 32 * 24);
+//! # Ok::<(), radcol_core::prelude::Error>(())
+//! ```
+
+pub use crate::assembly::{CpuBackend, QuadratureOptions};
+pub use crate::camera::Camera;
+pub use crate::problem::{Field, Problem};
+pub use crate::progress::{Progress, ProgressHandle};
+pub use crate::query::{query, PointEvaluator, PointValues, QueryError, QueryPoint, DEFAULT_SNAP};
+pub use crate::render::{
+    render, tone_map, vertex_mesh, Image, RenderError, RenderOptions, ToneMap, VertexMesh,
+};
+pub use crate::run::adapt::{solve_adaptive, AdaptOptions, AdaptOutcome, AdaptStep, StopReason};
+pub use crate::run::{solve, Relighter, SolveConfig, SolveOutcome, SolverKind};
+pub use crate::scene::{builtin, load_gltf, load_obj, Scene, SceneError};
+pub use crate::solution::Solution;
+
+use std::path::Path;
+
+/// Every failure of the calls above: a solve's ([`crate::error::Error`],
+/// bad input included), a scene file's, a render's, a point query's.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The solve (bad input, a solver or backend failure, cancellation).
+    #[error(transparent)]
+    Solve(#[from] crate::error::Error),
+    /// A scene file.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// Rendering or tessellating a solution.
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    /// A point query.
+    #[error(transparent)]
+    Query(#[from] QueryError),
+}
+
+impl From<crate::error::InputError> for Error {
+    fn from(e: crate::error::InputError) -> Self {
+        Error::Solve(e.into())
+    }
+}
+
+/// Loads a scene file by its extension: `.obj` ([`load_obj`]), `.gltf` or
+/// `.glb` ([`load_gltf`]); anything else is refused with the path named.
+pub fn load_scene(path: &Path) -> Result<Scene, Error> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    Ok(match ext.as_deref() {
+        Some("obj") => load_obj(path)?,
+        Some("gltf" | "glb") => load_gltf(path)?,
+        _ => {
+            return Err(SceneError::Unreadable {
+                path: path.to_path_buf(),
+                message: "not a scene file: the name must end in .obj, .gltf or .glb".into(),
+            }
+            .into())
+        }
+    })
+}
