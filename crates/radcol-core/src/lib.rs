@@ -76,13 +76,16 @@ pub mod matrix;
 pub mod mesh;
 pub mod nodes;
 pub mod norms;
+#[cfg(all(feature = "scenes", feature = "render"))]
 pub mod prelude;
 pub mod problem;
 pub mod progress;
 pub mod quadrature;
 pub mod query;
+#[cfg(feature = "render")]
 pub mod render;
 pub mod run;
+#[cfg(feature = "scenes")]
 pub mod scene;
 pub mod solution;
 pub mod solve;

@@ -366,6 +366,7 @@ impl Scene {
 
     /// A camera for the scene: its own, else one chosen to show the lit sides
     /// of its triangles ([`crate::render::auto_camera`]).
+    #[cfg(feature = "render")]
     pub fn camera_or_auto(&self) -> Camera {
         self.camera.unwrap_or_else(|| {
             crate::render::auto_camera(&crate::mesh::Mesh::new(self.surface.clone(), 0))
