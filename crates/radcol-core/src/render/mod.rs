@@ -16,6 +16,8 @@ mod tessellation;
 mod tonemap;
 mod vertex;
 
+pub mod lightmap;
+
 pub use bvh::{ElementBvh, Hit};
 pub use tessellation::{tessellation_points, tessellation_triangles, tessellation_vertex_count};
 pub use tonemap::{
@@ -66,6 +68,9 @@ pub enum RenderError {
     /// Zero subdivisions for the vertex read-back.
     #[error("vertex mesh subdivisions = {0}: must be at least 1")]
     Subdivisions(u32),
+    /// A lightmap cannot be made (size, curved patches, packing).
+    #[error("lightmap: {0}")]
+    Lightmap(String),
     /// The vertex mesh would need more than u32 indices.
     #[error("vertex mesh of {elements} elements × {per_element} vertices exceeds the 32-bit index range")]
     TooManyVertices {
