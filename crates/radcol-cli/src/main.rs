@@ -19,6 +19,7 @@
 mod args;
 mod error;
 mod export;
+mod lightmap;
 mod output;
 mod panics;
 mod plot;

@@ -3,6 +3,7 @@
 
 use crate::error::bad_input;
 use crate::export;
+use crate::lightmap;
 use crate::progress::Bar;
 use crate::report::Written;
 use crate::setup::Look;
@@ -28,6 +29,7 @@ pub fn write_all(
     let names: Vec<&str> = out.channels.iter().map(|c| c.name.as_str()).collect();
     let mut image: Option<Image> = None;
     let mut vertices: Option<VertexMesh> = None;
+    let mut baked: Option<lightmap::Baked> = None;
     let mut written = Vec::new();
     for o in outputs {
         let t = Instant::now();
@@ -37,6 +39,14 @@ pub fn write_all(
         }
         if o.kind == OutputKind::ErrorMap {
             written.push(write_error_map(o, look, out, t)?);
+            continue;
+        }
+        if let Some(what) = lightmap::output(o, look, mesh, &solutions, &mut baked, bar)? {
+            written.push(Written {
+                path,
+                what,
+                seconds: t.elapsed().as_secs_f64(),
+            });
             continue;
         }
         if o.kind.is_image() && image.is_none() {
@@ -71,7 +81,9 @@ pub fn write_all(
                 export::exr::write(f, img).with_context(|| format!("writing {path}"))?;
                 format!("{}×{} linear radiance image", img.width, img.height)
             }
-            OutputKind::ErrorMap => unreachable!("written above"),
+            OutputKind::ErrorMap | OutputKind::LightmapExr | OutputKind::LightmapPng => {
+                unreachable!("written above")
+            }
             OutputKind::Ply | OutputKind::Glb | OutputKind::Gltf => {
                 let vm = vertices.as_ref().expect("tessellated above");
                 let mut f = create(&o.file)?;
@@ -105,14 +117,15 @@ pub fn write_all(
 
 /// The glTF nodes: with a scene, one per object (the patch name's group, the
 /// part before '/'), in the order they first appear; else one.
-fn layout(mesh: &radcol_core::mesh::Mesh, look: &Look) -> export::gltf::Layout {
+pub(crate) fn layout(mesh: &radcol_core::mesh::Mesh, look: &Look) -> export::gltf::Layout {
     let mut layout = export::gltf::Layout::single(&look.scene, mesh.len());
     layout.metres_per_unit = look.metres_per_unit;
+    let patches = &mesh.surface().patches;
     if !look.objects {
+        layout.object_of_patch = vec![0; patches.len()];
         return layout;
     }
     layout.objects.clear();
-    let patches = &mesh.surface().patches;
     let object_of_patch: Vec<u32> = patches
         .iter()
         .map(|p| {
@@ -131,6 +144,7 @@ fn layout(mesh: &radcol_core::mesh::Mesh, look: &Look) -> export::gltf::Layout {
         .iter()
         .map(|e| object_of_patch[e.patch as usize])
         .collect();
+    layout.object_of_patch = object_of_patch;
     layout
 }
 

@@ -235,6 +235,8 @@ pub struct Look {
     /// Whether the surface is a scene whose objects (OBJ groups, glTF
     /// nodes) become glTF nodes of their own.
     pub objects: bool,
+    /// The lightmap's size in texels, when one is baked.
+    pub lightmap: Option<u32>,
 }
 
 /// The look of `spec` for the scene and degree of `s`.
@@ -252,6 +254,7 @@ pub fn look(spec: &LookSpec, s: &Setup) -> Look {
             .or_else(|| s.loaded.scene().and_then(|sc| sc.metres_per_unit))
             .unwrap_or(1.0),
         objects: s.loaded.scene().is_some(),
+        lightmap: spec.lightmap,
     }
 }
 

@@ -1886,3 +1886,79 @@ fn units_scale_the_gltf_root() {
         );
     }
 }
+
+/// `--lightmap`: the EXR and PNG atlases, and glTF outputs on the scene's
+/// own triangles with texture coordinates into the atlas and the PNG as an
+/// unlit texture; bad files and sizes, and curved surfaces, refused.
+#[test]
+fn lightmaps_and_lightmapped_gltf() {
+    let dir = scratch("lightmap");
+    let path = |n: &str| dir.join(n).to_str().unwrap().to_string();
+    let (png, exr, glb) = (path("l.png"), path("l.exr"), path("l.glb"));
+    radcol_ok(&[
+        "solve",
+        "cornell",
+        "--level",
+        "0",
+        "--no-estimate",
+        "--lightmap",
+        &png,
+        "--lightmap",
+        &exr,
+        "--lightmap-size",
+        "256",
+        "-o",
+        &glb,
+    ]);
+    let decoded = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
+    let info = decoded.read_info().unwrap().info().clone();
+    assert_eq!((info.width, info.height), (256, 256));
+    assert_eq!(
+        &std::fs::read(&exr).unwrap()[..4],
+        &[0x76, 0x2f, 0x31, 0x01]
+    );
+    let (doc, buffers, images) = gltf::import(&glb).unwrap();
+    assert_eq!(images.len(), 1);
+    assert_eq!((images[0].width, images[0].height), (256, 256));
+    let root = doc.scenes().next().unwrap().nodes().next().unwrap();
+    let mut triangles = 0;
+    for node in root.children() {
+        let prim = node.mesh().unwrap().primitives().next().unwrap();
+        let material = prim.material();
+        assert!(material.unlit());
+        assert!(material
+            .pbr_metallic_roughness()
+            .base_color_texture()
+            .is_some());
+        let reader = prim.reader(|b| Some(&buffers[b.index()]));
+        let uv: Vec<[f32; 2]> = reader.read_tex_coords(0).unwrap().into_f32().collect();
+        assert!(uv.iter().flatten().all(|&c| (0.0..=1.0).contains(&c)));
+        triangles += reader.read_positions().unwrap().count() / 3;
+    }
+    // The scene's own triangles (with the contact lines imprinted), not
+    // radcol's refinement: 8 objects, each face one or two triangles or its pieces.
+    assert_eq!(root.children().count(), 8);
+    assert!((30..200).contains(&triangles), "{triangles} triangles");
+    assert_one_line_error(
+        &["solve", "cornell", "--lightmap", &path("l.txt")],
+        2,
+        &["--lightmap", ".exr"],
+    );
+    assert_one_line_error(
+        &[
+            "solve",
+            "cornell",
+            "--lightmap-size",
+            "8",
+            "-o",
+            &path("m.glb"),
+        ],
+        2,
+        &["--lightmap-size 8"],
+    );
+    assert_one_line_error(
+        &["solve", "sphere", "--lightmap", &path("s.png")],
+        2,
+        &["curved"],
+    );
+}

@@ -51,6 +51,8 @@ pub struct Cli {
 
 /// The subcommands.
 #[derive(Debug, Subcommand)]
+// One per run: the variants' sizes do not matter.
+#[allow(clippy::large_enum_variant)]
 pub enum Command {
     /// Solve on one refinement level and report mesh, assembly, timings, solution integrals and errors.
     #[command(after_help = EXPRESSIONS)]

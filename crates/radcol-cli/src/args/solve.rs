@@ -156,6 +156,19 @@ pub struct SolveArgs {
     #[arg(help_heading = "Image", long, value_enum, default_value_t = TonemapArg::Aces)]
     pub tonemap: TonemapArg,
 
+    /// Bake u_n into a UV lightmap and write it to FILE: .exr (linear radiance u/pi) or
+    /// .png (tone-mapped); repeatable. The scene's triangles are unwrapped into planar
+    /// charts (one per flat face of each material) packed in one square atlas. With a
+    /// lightmap, .glb/.gltf outputs hold the scene's own triangles with texture coordinates
+    /// and the lightmap as their unlit texture, instead of vertex colours on radcol's mesh.
+    #[arg(help_heading = "Output", long, value_name = "FILE.exr|.png")]
+    pub lightmap: Vec<PathBuf>,
+
+    /// Lightmap width and height in texels (16..=16384); given alone, .glb/.gltf outputs
+    /// are lightmapped without a separate file [default: 1024].
+    #[arg(help_heading = "Output", long, value_name = "N")]
+    pub lightmap_size: Option<u32>,
+
     /// The scene's unit, for .glb/.gltf (whose unit is the metre): mm, cm, m, km, in, ft or
     /// metres per unit; the root node scales the positions, which stay in the input's units
     /// [default: the scene's own (glTF input: m; the built-in Cornell box: mm), else m].

@@ -43,6 +43,8 @@ pub struct Layout {
     pub objects: Vec<String>,
     /// Per element of the mesh: its object.
     pub object_of_element: Vec<u32>,
+    /// Per patch of the surface: its object.
+    pub object_of_patch: Vec<u32>,
 }
 
 impl Layout {
@@ -53,6 +55,7 @@ impl Layout {
             metres_per_unit: 1.0,
             objects: vec![scene.to_string()],
             object_of_element: vec![0; elements],
+            object_of_patch: Vec::new(),
         }
     }
 }
@@ -123,10 +126,6 @@ fn document(
     {
         bail!("glTF: vertex {i} has a non-finite position {p:?}");
     }
-    let s = layout.metres_per_unit;
-    if !(s.is_finite() && s > 0.0) {
-        bail!("glTF: metres per scene unit must be positive and finite, not {s}");
-    }
     let colors = mesh.linear_colors(tm);
     let mut bin = Vec::with_capacity(nv * 36 + mesh.indices.len() * 4);
     let (mut views, mut accessors, mut meshes, mut nodes) = (vec![], vec![], vec![], vec![]);
@@ -176,10 +175,7 @@ fn document(
         }]}));
         nodes.push(json!({"mesh": meshes.len() - 1, "name": name}));
     }
-    let mut root = json!({"name": layout.scene, "children": (1..=nodes.len()).collect::<Vec<_>>()});
-    if s != 1.0 {
-        root["scale"] = json!([s, s, s]);
-    }
+    let root = root_node(layout, nodes.len())?;
     nodes.insert(0, root);
     let mut buffer = json!({"byteLength": bin.len()});
     if let Some(uri) = uri {
@@ -204,16 +200,22 @@ fn document(
     Ok((doc, bin))
 }
 
-/// Writes `mesh` as a binary glTF (GLB): 12-byte header, a JSON chunk padded with
-/// spaces and a BIN chunk padded with zeros, both to 4 bytes.
-pub fn write_glb<W: Write>(
-    mut w: W,
-    mesh: &VertexMesh,
-    tm: &ToneMap,
-    layout: &Layout,
-) -> Result<()> {
-    let (doc, mut bin) = document(mesh, tm, layout, None)?;
-    let mut json = serde_json::to_vec(&doc)?;
+/// Writes `mesh` as a binary glTF (GLB).
+pub fn write_glb<W: Write>(w: W, mesh: &VertexMesh, tm: &ToneMap, layout: &Layout) -> Result<()> {
+    let (doc, bin) = document(mesh, tm, layout, None)?;
+    frame_glb(w, &doc, bin)
+}
+
+/// Writes `mesh` as one self-contained `.gltf` JSON file.
+pub fn write_gltf<W: Write>(w: W, mesh: &VertexMesh, tm: &ToneMap, layout: &Layout) -> Result<()> {
+    let (doc, bin) = document(mesh, tm, layout, None)?;
+    embed_gltf(w, doc, &bin)
+}
+
+/// A document and its buffer as GLB: 12-byte header, a JSON chunk padded
+/// with spaces and a BIN chunk padded with zeros, both to 4 bytes.
+pub(super) fn frame_glb<W: Write>(mut w: W, doc: &Value, mut bin: Vec<u8>) -> Result<()> {
+    let mut json = serde_json::to_vec(doc)?;
     json.resize(json.len().next_multiple_of(4), b' ');
     bin.resize(bin.len().next_multiple_of(4), 0);
     let total = 12 + 8 + json.len() + 8 + bin.len();
@@ -235,23 +237,31 @@ pub fn write_glb<W: Write>(
     Ok(())
 }
 
-/// Writes `mesh` as one self-contained `.gltf` JSON file, the buffer embedded as
-/// a `data:application/octet-stream;base64,` URI.
-pub fn write_gltf<W: Write>(
-    mut w: W,
-    mesh: &VertexMesh,
-    tm: &ToneMap,
-    layout: &Layout,
-) -> Result<()> {
-    let (mut doc, bin) = document(mesh, tm, layout, None)?;
+/// A document as one `.gltf` JSON file, its buffer embedded as a
+/// `data:application/octet-stream;base64,` URI.
+pub(super) fn embed_gltf<W: Write>(mut w: W, mut doc: Value, bin: &[u8]) -> Result<()> {
     doc["buffers"][0]["uri"] = json!(format!(
         "data:application/octet-stream;base64,{}",
-        STANDARD.encode(&bin)
+        STANDARD.encode(bin)
     ));
     serde_json::to_writer_pretty(&mut w, &doc)?;
     w.write_all(b"\n")?;
     w.flush()?;
     Ok(())
+}
+
+/// The scene's root node over `children` nodes (1..=children), scaled to
+/// metres.
+pub(super) fn root_node(layout: &Layout, children: usize) -> Result<Value> {
+    let s = layout.metres_per_unit;
+    if !(s.is_finite() && s > 0.0) {
+        bail!("glTF: metres per scene unit must be positive and finite, not {s}");
+    }
+    let mut root = json!({"name": layout.scene, "children": (1..=children).collect::<Vec<_>>()});
+    if s != 1.0 {
+        root["scale"] = json!([s, s, s]);
+    }
+    Ok(root)
 }
 
 #[cfg(test)]
@@ -282,6 +292,7 @@ mod tests {
             metres_per_unit: 1e-3,
             objects: vec!["floor".into(), "unused".into(), "light".into()],
             object_of_element: vec![2, 0],
+            object_of_patch: Vec::new(),
         };
         let mut bytes = Vec::new();
         write_glb(&mut bytes, &tiny(), &tm(), &layout).unwrap();

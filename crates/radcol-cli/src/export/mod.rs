@@ -8,6 +8,7 @@
 pub mod error_map;
 pub mod exr;
 pub mod gltf;
+pub mod lightmapped;
 pub mod ply;
 pub mod png;
 

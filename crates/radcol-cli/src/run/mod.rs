@@ -64,6 +64,15 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
     }
     let relit = relight::relit_problems(&job.relight, &s)?;
     let look = setup::look(&job.look, &s);
+    if let Some(size) = look.lightmap {
+        // Unwrapped before the solve, so a surface that cannot be (curved)
+        // is refused before any work.
+        radcol_core::render::lightmap::Atlas::new(&s.problem.surface, size).map_err(|e| {
+            let why = e.to_string();
+            let why = why.strip_prefix("lightmap: ").unwrap_or(&why).to_string();
+            crate::error::bad_input(format!("--lightmap: {why}"))
+        })?;
+    }
     let bar = progress::Bar::for_stderr();
     s.cfg.progress = bar.as_ref().map(|b| b.handle());
     let (out, adaptive) = match &job.adapt {

@@ -198,6 +198,13 @@ fn solve_job(a: SolveArgs) -> Result<SolveJob> {
         }
         outputs.push(map);
     }
+    for p in &a.lightmap {
+        let map = outputs::lightmap(p, a.problem.force)?;
+        if outputs.iter().any(|o| o.file.path == map.file.path) {
+            return Err(bad_input(format!("--lightmap {} is given twice", p.display())).into());
+        }
+        outputs.push(map);
+    }
     let look = look(&a)?;
     let adapt = a
         .target_error

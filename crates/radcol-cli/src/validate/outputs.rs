@@ -24,6 +24,10 @@ pub enum OutputKind {
     Exr,
     /// Map of the element error estimates (`--error-map`, PNG).
     ErrorMap,
+    /// The lightmap atlas, linear (`--lightmap`, EXR).
+    LightmapExr,
+    /// The lightmap atlas, tone-mapped (`--lightmap`, PNG).
+    LightmapPng,
 }
 
 impl OutputKind {
@@ -77,6 +81,46 @@ pub struct LookSpec {
     pub tessellation: Option<u32>,
     /// --units: metres per scene unit, when given.
     pub metres_per_unit: Option<f64>,
+    /// The lightmap's size in texels, when one is baked (--lightmap or
+    /// --lightmap-size).
+    pub lightmap: Option<u32>,
+}
+
+/// The lightmap's size when one is asked for.
+fn lightmap_size(a: &SolveArgs) -> Result<Option<u32>, BadInput> {
+    if let Some(n) = a.lightmap_size.filter(|n| !(16..=16384).contains(n)) {
+        return Err(bad_input(format!(
+            "--lightmap-size {n}: must lie in 16..=16384 texels"
+        )));
+    }
+    Ok((!a.lightmap.is_empty() || a.lightmap_size.is_some())
+        .then(|| a.lightmap_size.unwrap_or(1024)))
+}
+
+/// A `--lightmap` file: EXR or PNG by its extension.
+pub(super) fn lightmap(path: &Path, force: bool) -> Result<Output, BadInput> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let kind = match ext.as_deref() {
+        Some("exr") => OutputKind::LightmapExr,
+        Some("png") => OutputKind::LightmapPng,
+        _ => {
+            return Err(bad_input(format!(
+                "--lightmap {}: the name must end in .exr (linear) or .png (tone-mapped)",
+                path.display()
+            )))
+        }
+    };
+    Ok(Output {
+        kind,
+        file: OutputFile {
+            path: path.to_path_buf(),
+            force,
+            flag: "--lightmap",
+        },
+    })
 }
 
 /// `--units`: a unit's name or metres per scene unit.
@@ -224,6 +268,7 @@ pub(super) fn look(a: &SolveArgs) -> Result<LookSpec, BadInput> {
         },
         tessellation: a.tessellation,
         metres_per_unit: a.units.as_deref().map(units).transpose()?,
+        lightmap: lightmap_size(a)?,
     })
 }
 
