@@ -15,9 +15,9 @@
 //! **Baking.** Every element of the solve's mesh lies in one chart; each
 //! texel whose centre lies in an element's projection gets u_n/π (radiance)
 //! at that point of the element, exactly as the renderer evaluates it. The
-//! empty texels of the gutters are then filled from their covered
-//! neighbours, [`GUTTER`] passes, so bilinear filtering at chart borders
-//! does not bleed the background in.
+//! empty texels around the charts are then filled from their covered
+//! neighbours, [`DILATION`] passes, so bilinear filtering and mipmaps at
+//! chart borders do not bleed the background in.
 
 use super::{check_solutions, eval_rgb, Image, RenderError};
 use crate::geometry::Surface;
@@ -28,6 +28,13 @@ use std::f64::consts::PI;
 
 /// Empty texels around every chart.
 pub const GUTTER: u32 = 2;
+
+/// Texels the charts are grown by into the empty atlas (their gutters and
+/// beyond): viewers and engines sample mipmaps of a lightmap, and a level
+/// 2^k smaller averages 2^k texels, so an empty texel within 16 of a chart
+/// would bleed black into it down to level 4 (seams seen in pyrender's view
+/// with 2).
+pub const DILATION: u32 = 16;
 
 /// One chart: coplanar triangles of one patch and their placement.
 #[derive(Clone, Debug)]
@@ -306,7 +313,7 @@ pub fn bake(mesh: &Mesh, solutions: &[&Solution], atlas: &Atlas) -> Result<Image
         }
     }
     let charted: Vec<bool> = covered.clone();
-    dilate(&mut rgb, &mut covered, n, GUTTER as usize);
+    dilate(&mut rgb, &mut covered, n, DILATION as usize);
     Ok(Image {
         width: atlas.size,
         height: atlas.size,
