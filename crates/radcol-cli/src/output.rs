@@ -9,6 +9,7 @@ use crate::report::Written;
 use crate::setup::Look;
 use crate::validate::{Output, OutputFile, OutputKind};
 use anyhow::{Context, Result};
+use radcol_core::mesh::Mesh;
 use radcol_core::render::{self, Image, VertexMesh};
 use radcol_core::run::SolveOutcome;
 use radcol_core::solution::Solution;
@@ -62,7 +63,7 @@ pub fn write_all(
         if matches!(o.kind, OutputKind::Ply | OutputKind::Glb | OutputKind::Gltf)
             && vertices.is_none()
         {
-            vertices = Some(render::vertex_mesh(mesh, &solutions, look.tessellation)?);
+            vertices = Some(vertex_mesh(mesh, &solutions, look)?);
         }
         let what = match o.kind {
             OutputKind::Csv => format!("{} node rows", write_csv(&o.file, out)?),
@@ -89,7 +90,11 @@ pub fn write_all(
                 let mut f = create(&o.file)?;
                 match o.kind {
                     OutputKind::Ply => {
-                        let errors = element_estimates(out).map(|e| vertex_values(vm, &e));
+                        // Per vertex of an element: its element's estimate
+                        // (a scene triangle spans many elements: none).
+                        let errors = element_estimates(out)
+                            .filter(|_| look.input_vertices.is_none())
+                            .map(|e| vertex_values(vm, &e));
                         export::ply::write(&mut f, vm, &names, &look.tone, errors.as_deref())
                     }
                     OutputKind::Glb => {
@@ -115,9 +120,18 @@ pub fn write_all(
     Ok(written)
 }
 
+/// The vertex mesh of .ply/.glb/.gltf: on the elements, or on the scene's
+/// triangles (--vertices).
+fn vertex_mesh(mesh: &Mesh, solutions: &[&Solution], look: &Look) -> Result<VertexMesh> {
+    Ok(match look.input_vertices {
+        Some(corners) => render::input_vertex_mesh(mesh, solutions, corners)?,
+        None => render::vertex_mesh(mesh, solutions, look.tessellation)?,
+    })
+}
+
 /// The glTF nodes: with a scene, one per object (the patch name's group, the
 /// part before '/'), in the order they first appear; else one.
-pub(crate) fn layout(mesh: &radcol_core::mesh::Mesh, look: &Look) -> export::gltf::Layout {
+pub(crate) fn layout(mesh: &Mesh, look: &Look) -> export::gltf::Layout {
     let mut layout = export::gltf::Layout::single(&look.scene, mesh.len());
     layout.metres_per_unit = look.metres_per_unit;
     let patches = &mesh.surface().patches;

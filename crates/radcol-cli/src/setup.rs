@@ -237,6 +237,8 @@ pub struct Look {
     pub objects: bool,
     /// The lightmap's size in texels, when one is baked.
     pub lightmap: Option<u32>,
+    /// Vertex meshes on the scene's triangles (and how corners are shared).
+    pub input_vertices: Option<radcol_core::render::Corners>,
 }
 
 /// The look of `spec` for the scene and degree of `s`.
@@ -255,6 +257,7 @@ pub fn look(spec: &LookSpec, s: &Setup) -> Look {
             .unwrap_or(1.0),
         objects: s.loaded.scene().is_some(),
         lightmap: spec.lightmap,
+        input_vertices: spec.input_vertices,
     }
 }
 

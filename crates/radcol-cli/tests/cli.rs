@@ -1962,3 +1962,46 @@ fn lightmaps_and_lightmapped_gltf() {
         &["curved"],
     );
 }
+
+/// `--vertices input|input-shared`: glTF vertex colours on the scene's own
+/// triangles (three corners each, or shared within a material), the same
+/// triangles as the lightmapped glTF's, in the same 8 objects.
+#[test]
+fn vertex_colours_on_the_input_mesh() {
+    let dir = scratch("vertices");
+    let mut counts = Vec::new();
+    for v in ["input", "input-shared"] {
+        let glb = dir.join(format!("{v}.glb"));
+        let p = glb.to_str().unwrap();
+        radcol_ok(&[
+            "solve",
+            "cornell",
+            "--level",
+            "0",
+            "--no-estimate",
+            "--vertices",
+            v,
+            "-o",
+            p,
+            "--force",
+        ]);
+        let (doc, buffers, _) = gltf::import(&glb).unwrap();
+        let root = doc.scenes().next().unwrap().nodes().next().unwrap();
+        assert_eq!(root.children().count(), 8);
+        let (mut vertices, mut triangles) = (0, 0);
+        for node in root.children() {
+            let prim = node.mesh().unwrap().primitives().next().unwrap();
+            let reader = prim.reader(|b| Some(&buffers[b.index()]));
+            vertices += reader.read_positions().unwrap().count();
+            triangles += reader.read_indices().unwrap().into_u32().count() / 3;
+            assert!(reader.read_colors(0).is_some());
+        }
+        counts.push((vertices, triangles));
+    }
+    let (split, shared) = (counts[0], counts[1]);
+    assert_eq!(split.0, 3 * split.1);
+    assert_eq!(shared.1, split.1);
+    assert!(shared.0 < split.0, "{counts:?}");
+    let out = radcol(&["solve", "cornell", "--vertices", "corners"]);
+    assert_eq!(out.status.code(), Some(2));
+}

@@ -1,6 +1,6 @@
 //! `radcol solve`'s own arguments (the problem's are [`super::ProblemArgs`]).
 
-use super::{ProblemArgs, TonemapArg};
+use super::{ProblemArgs, TonemapArg, VerticesArg};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -179,6 +179,12 @@ pub struct SolveArgs {
         allow_hyphen_values = true
     )]
     pub units: Option<String>,
+
+    /// Vertices of .ply/.glb/.gltf: a tessellation of radcol's elements (every detail of
+    /// u_n), or the scene's own triangles with u_n at their corners, each triangle's own
+    /// (input) or averaged where corners of one material meet (input-shared).
+    #[arg(help_heading = "Output", long, value_enum, default_value_t = VerticesArg::Elements)]
+    pub vertices: VerticesArg,
 
     /// Triangles per element edge in .ply/.glb/.gltf (N² per element), so that degree-r
     /// polynomials show inside elements [default: max(r, 1)].

@@ -74,3 +74,15 @@ pub enum TonemapArg {
     /// Clamp to [0, 1].
     Linear,
 }
+
+/// `--vertices`: where the vertex meshes' values live.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum VerticesArg {
+    /// A tessellation of every element of radcol's mesh (`--tessellation`).
+    Elements,
+    /// The scene's own triangles, three vertices each with their own values.
+    Input,
+    /// The scene's own triangles, corners of one material at one position
+    /// and normal shared, their values averaged.
+    InputShared,
+}

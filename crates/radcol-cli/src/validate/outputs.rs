@@ -1,7 +1,7 @@
 //! Output files and the look of images, as given: kinds by extension,
 //! camera, image size, exposure, tone curve and tessellation.
 
-use crate::args::{SolveArgs, TonemapArg};
+use crate::args::{SolveArgs, TonemapArg, VerticesArg};
 use crate::error::{bad_input, BadInput};
 use radcol_core::camera::Camera;
 use radcol_core::render::{RenderOptions, ToneMap, ToneOperator};
@@ -84,6 +84,9 @@ pub struct LookSpec {
     /// The lightmap's size in texels, when one is baked (--lightmap or
     /// --lightmap-size).
     pub lightmap: Option<u32>,
+    /// --vertices: the vertex meshes on the scene's triangles, and with
+    /// which corners shared, instead of on the elements.
+    pub input_vertices: Option<radcol_core::render::Corners>,
 }
 
 /// The lightmap's size when one is asked for.
@@ -269,6 +272,11 @@ pub(super) fn look(a: &SolveArgs) -> Result<LookSpec, BadInput> {
         tessellation: a.tessellation,
         metres_per_unit: a.units.as_deref().map(units).transpose()?,
         lightmap: lightmap_size(a)?,
+        input_vertices: match a.vertices {
+            VerticesArg::Elements => None,
+            VerticesArg::Input => Some(radcol_core::render::Corners::Split),
+            VerticesArg::InputShared => Some(radcol_core::render::Corners::Shared),
+        },
     })
 }
 

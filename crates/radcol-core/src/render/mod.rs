@@ -16,7 +16,10 @@ mod tessellation;
 mod tonemap;
 mod vertex;
 
+mod input_mesh;
 pub mod lightmap;
+
+pub use input_mesh::{input_vertex_mesh, Corners};
 
 pub use bvh::{ElementBvh, Hit};
 pub use tessellation::{tessellation_points, tessellation_triangles, tessellation_vertex_count};
@@ -68,6 +71,10 @@ pub enum RenderError {
     /// Zero subdivisions for the vertex read-back.
     #[error("vertex mesh subdivisions = {0}: must be at least 1")]
     Subdivisions(u32),
+    /// A corner of a scene triangle lies in none of its elements (vertex
+    /// colours on the input mesh).
+    #[error("input mesh: {0}")]
+    InputMesh(String),
     /// A lightmap cannot be made (size, curved patches, packing).
     #[error("lightmap: {0}")]
     Lightmap(String),
