@@ -1,14 +1,15 @@
 //! Baking a scene's diffuse light through the library's facade
 //! (`radcol_core::prelude`): load a scene, refine adaptively to a target
 //! error while a progress observer reports the stages, then read the light
-//! back at points (û_n, the iterated solution, with the element's estimate)
-//! and as an image.
+//! back at points (û_n, the iterated solution, with the element's estimate),
+//! as an image and as a UV lightmap.
 //!
-//!     cargo run --release -p radcol-core --example bake -- [SCENE] [TARGET] [OUT.ppm]
+//!     cargo run --release -p radcol-core --example bake -- [SCENE] [TARGET] [OUT.ppm] [LIGHTMAP.ppm]
 //!
 //! SCENE is a `.obj`, `.gltf` or `.glb` file or a built-in name (default
 //! `cornell`), TARGET the estimated max error relative to max u (default
-//! 1e-2), OUT a binary PPM image of the scene's camera view (default: none).
+//! 1e-2), OUT a binary PPM image of the scene's camera view, LIGHTMAP the
+//! scene's 1024² lightmap atlas, tone-mapped (default: neither).
 
 use radcol_core::prelude::*;
 use std::io::Write;
@@ -109,6 +110,13 @@ fn main() -> Result<(), Error> {
             .collect();
         println!("  {name:<28} radiance {}", radiance.join(", "));
     }
+    if let Some(out) = args.get(3) {
+        let shown: Vec<&Solution> = outcome.channels.iter().map(|c| c.shown()).collect();
+        let atlas = Atlas::new(&scene.surface, 1024)?;
+        let lightmap = bake_lightmap(outcome.discretization.mesh(), &shown, &atlas)?;
+        write_ppm(out, &lightmap);
+        println!("wrote {out}: {} charts", atlas.charts.len());
+    }
     if let Some(out) = args.get(2) {
         let shown: Vec<&Solution> = outcome.channels.iter().map(|c| c.shown()).collect();
         let options = RenderOptions {
@@ -118,11 +126,16 @@ fn main() -> Result<(), Error> {
         };
         let camera = scene.camera_or_auto();
         let image = render(outcome.discretization.mesh(), &shown, &camera, &options)?;
-        let pixels = tone_map(&image, &ToneMap::default());
-        let mut f = std::io::BufWriter::new(std::fs::File::create(out).expect("writable"));
-        write!(f, "P6\n{} {}\n255\n", image.width, image.height).expect("written");
-        f.write_all(pixels.as_flattened()).expect("written");
+        write_ppm(out, &image);
         println!("wrote {out}");
     }
     Ok(())
+}
+
+/// A binary PPM of `image`, tone-mapped.
+fn write_ppm(path: &str, image: &Image) {
+    let pixels = tone_map(image, &ToneMap::default());
+    let mut f = std::io::BufWriter::new(std::fs::File::create(path).expect("writable"));
+    write!(f, "P6\n{} {}\n255\n", image.width, image.height).expect("written");
+    f.write_all(pixels.as_flattened()).expect("written");
 }

@@ -23,8 +23,10 @@ pub use crate::camera::Camera;
 pub use crate::problem::{Field, Problem};
 pub use crate::progress::{Progress, ProgressHandle};
 pub use crate::query::{query, PointEvaluator, PointValues, QueryError, QueryPoint, DEFAULT_SNAP};
+pub use crate::render::lightmap::{bake as bake_lightmap, Atlas};
 pub use crate::render::{
-    render, tone_map, vertex_mesh, Image, RenderError, RenderOptions, ToneMap, VertexMesh,
+    input_vertex_mesh, render, tone_map, vertex_mesh, Corners, Image, RenderError, RenderOptions,
+    ToneMap, VertexMesh,
 };
 pub use crate::run::adapt::{solve_adaptive, AdaptOptions, AdaptOutcome, AdaptStep, StopReason};
 pub use crate::run::{solve, Relighter, SolveConfig, SolveOutcome, SolverKind};
