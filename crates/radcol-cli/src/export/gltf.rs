@@ -135,14 +135,7 @@ fn document(
     };
     for (name, part) in parts(mesh, &colors, layout)? {
         let n = part.positions.len();
-        let mut min = [f32::INFINITY; 3];
-        let mut max = [f32::NEG_INFINITY; 3];
-        for p in &part.positions {
-            for c in 0..3 {
-                min[c] = min[c].min(p[c]);
-                max[c] = max[c].max(p[c]);
-            }
-        }
+        let (min, max) = position_bounds(&part.positions);
         let first = accessors.len();
         for (i, section) in [&part.positions, &part.normals, &part.colors]
             .into_iter()
@@ -248,6 +241,19 @@ pub(super) fn embed_gltf<W: Write>(mut w: W, mut doc: Value, bin: &[u8]) -> Resu
     w.write_all(b"\n")?;
     w.flush()?;
     Ok(())
+}
+
+/// POSITION's min and max, which the spec requires.
+pub(super) fn position_bounds(positions: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
+    let mut min = [f32::INFINITY; 3];
+    let mut max = [f32::NEG_INFINITY; 3];
+    for p in positions {
+        for c in 0..3 {
+            min[c] = min[c].min(p[c]);
+            max[c] = max[c].max(p[c]);
+        }
+    }
+    (min, max)
 }
 
 /// The scene's root node over `children` nodes (1..=children), scaled to

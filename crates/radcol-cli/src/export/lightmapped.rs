@@ -5,7 +5,7 @@
 //! node and mesh per object under the scene's root, as [`super::gltf`]
 //! writes the vertex-colour mesh.
 
-use super::gltf::{embed_gltf, frame_glb, root_node, Layout};
+use super::gltf::{embed_gltf, frame_glb, position_bounds, root_node, Layout};
 use anyhow::{bail, Result};
 use glam::DVec3;
 use radcol_core::geometry::Surface;
@@ -93,14 +93,7 @@ fn document(l: &Lightmapped<'_>) -> Result<(Value, Vec<u8>)> {
         if n == 0 {
             continue;
         }
-        let mut min = [f32::INFINITY; 3];
-        let mut max = [f32::NEG_INFINITY; 3];
-        for p in &part.positions {
-            for c in 0..3 {
-                min[c] = min[c].min(p[c]);
-                max[c] = max[c].max(p[c]);
-            }
-        }
+        let (min, max) = position_bounds(&part.positions);
         let le = |xs: &[f32]| xs.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
         let first = accessors.len();
         let pos = push_view(

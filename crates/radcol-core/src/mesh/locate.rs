@@ -110,27 +110,7 @@ impl Locator {
     pub fn locate(&self, mesh: &Mesh, x: DVec3) -> Option<(usize, [f64; 2])> {
         let mut cands = Vec::new();
         self.near(x, 0.0, &mut cands);
-        let mut best: Option<(usize, [f64; 2], f64)> = None;
-        for k in cands {
-            let (c, rad) = mesh.bounding_ball(k);
-            if (x - c).length() > rad * 1.1 + 1e-12 {
-                continue;
-            }
-            let [s, t] = mesh.project_onto(k, x);
-            let eps = 1e-9;
-            if !(s >= -eps && t >= -eps && s + t <= 1.0 + eps) {
-                continue;
-            }
-            let st = [s.clamp(0.0, 1.0), t.clamp(0.0, 1.0)];
-            let miss = (mesh.position(k, st[0], st[1]) - x).length();
-            let better = best
-                .as_ref()
-                .is_none_or(|b| miss < b.2 || (miss == b.2 && k < b.0));
-            if miss <= 1e-9 * rad.max(1e-300) && better {
-                best = Some((k, st, miss));
-            }
-        }
-        best.map(|(k, st, _)| (k, st))
+        mesh.locate_among(cands, x)
     }
 
     /// The point of S nearest to `x` within distance `reach`, on an element

@@ -6,6 +6,7 @@
 //! across patches whose maps agree on shared edges, as the superconvergence
 //! theorems 7 and 9 require.
 
+mod base;
 pub mod grading;
 mod locate;
 
@@ -295,8 +296,19 @@ impl Mesh {
     /// contains x: the linear scan that [`Locator`] does through a BVH, kept as
     /// its reference.
     pub fn locate(&self, x: DVec3) -> Option<(usize, [f64; 2])> {
+        self.locate_among(0..self.len(), x)
+    }
+
+    /// [`Mesh::locate`] over the elements `ks` (ascending): of those whose
+    /// widened bounding ball contains x and that hold it, the nearest, the
+    /// first of equals.
+    pub(crate) fn locate_among(
+        &self,
+        ks: impl IntoIterator<Item = usize>,
+        x: DVec3,
+    ) -> Option<(usize, [f64; 2])> {
         let mut best: Option<(usize, [f64; 2], f64)> = None;
-        for k in 0..self.len() {
+        for k in ks {
             let (c, rad) = self.bounding_ball(k);
             if (x - c).length() > rad * 1.1 + 1e-12 {
                 continue;

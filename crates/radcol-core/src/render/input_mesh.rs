@@ -31,17 +31,11 @@ pub fn input_vertex_mesh(
 ) -> Result<VertexMesh, RenderError> {
     check_solutions(mesh, solutions)?;
     let surface = mesh.surface();
-    // The elements of each base triangle (patch, triangle), found by their
-    // parameter centroids.
+    // The elements of each base triangle (patch, triangle).
     let mut inside: HashMap<(u32, usize), Vec<usize>> = HashMap::new();
-    for (k, e) in mesh.elements().iter().enumerate() {
-        let c = (e.param[0] + e.param[1] + e.param[2]) / 3.0;
-        let tris = &surface.patches[e.patch as usize].triangles;
-        if let Some(t) = tris
-            .iter()
-            .position(|p| barycentric_st(p[0], p[1], p[2], c).is_some())
-        {
-            inside.entry((e.patch, t)).or_default().push(k);
+    for (k, base) in mesh.base_triangles().into_iter().enumerate() {
+        if let Some((j, t)) = base {
+            inside.entry((j, t as usize)).or_default().push(k);
         }
     }
     let mut out = VertexMesh::default();
