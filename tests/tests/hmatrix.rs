@@ -258,3 +258,35 @@ fn box_room_compressed_against_dense_and_closed() {
 fn cornell_compressed_against_dense() {
     check("cornell", &case(scene("cornell"), 0, Some(120.0)));
 }
+
+/// Products with several vectors at once (the colour channels of one GMRES
+/// iteration) equal the products one by one: to the bit for the dense
+/// matrix, whose rows are dotted in the same order, and to rounding for the
+/// compressed one, whose leaves are summed in parallel in any order.
+#[test]
+fn products_with_several_vectors_equal_single_ones() {
+    let c = case(scene("cornell"), 0, Some(120.0));
+    let h = PlanEntries::new(&c.plan).build(&HOptions::default());
+    let n = c.dense.nrows();
+    let xs: Vec<Vec<f64>> = (0..3).map(|k| vector(n + k)[k..].to_vec()).collect();
+    let single = |op: &dyn LinearOperator| -> Vec<Vec<f64>> {
+        xs.iter()
+            .map(|x| {
+                let mut y = vec![0.0; n];
+                op.apply(x, &mut y);
+                y
+            })
+            .collect()
+    };
+    let many = |op: &dyn LinearOperator| -> Vec<Vec<f64>> {
+        let mut ys = vec![vec![0.0; n]; 3];
+        let refs: Vec<&[f64]> = xs.iter().map(Vec::as_slice).collect();
+        let mut outs: Vec<&mut [f64]> = ys.iter_mut().map(Vec::as_mut_slice).collect();
+        op.apply_many(&refs, &mut outs);
+        ys
+    };
+    assert_eq!(many(&c.dense), single(&c.dense));
+    for (a, b) in many(&h).iter().zip(&single(&h)) {
+        assert!(rel(a, b) < 1e-14, "{}", rel(a, b));
+    }
+}

@@ -101,3 +101,65 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     }
     s
 }
+
+/// `[dot(a, bs[0]), …, dot(a, bs[K-1])]`, each bit for bit as [`dot`]
+/// computes it (the same four accumulators in the same order), with every
+/// element of `a` loaded once for all K products: a matrix row multiplied
+/// by the Krylov vectors of K colour channels is read from memory once.
+#[inline]
+pub fn dots<const K: usize>(a: &[f64], bs: [&[f64]; K]) -> [f64; K] {
+    let n = bs.iter().fold(a.len(), |n, b| n.min(b.len()));
+    let (a, bs) = (&a[..n], bs.map(|b| &b[..n]));
+    let mut acc = [[0.0f64; 4]; K];
+    let ca = a.chunks_exact(4);
+    let rest = ca.remainder();
+    let mut cbs = bs.map(|b| b.chunks_exact(4));
+    for x in ca {
+        for (acc, cb) in acc.iter_mut().zip(cbs.iter_mut()) {
+            let y = cb.next().expect("as long as a");
+            for k in 0..4 {
+                acc[k] += x[k] * y[k];
+            }
+        }
+    }
+    let mut out = [0.0; K];
+    for ((o, acc), cb) in out.iter_mut().zip(&acc).zip(&cbs) {
+        let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+        for (x, y) in rest.iter().zip(cb.remainder()) {
+            s += x * y;
+        }
+        *o = s;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `dots` gives `dot`'s every bit, whatever the length's remainder
+    /// modulo 4 and the number of vectors.
+    #[test]
+    fn dots_are_dot_to_the_bit() {
+        let v = |n: usize, s: f64| -> Vec<f64> {
+            (0..n)
+                .map(|i| ((i as f64 + s) * 0.618_033_988_749_895).fract() - 0.3)
+                .collect()
+        };
+        for n in [0, 1, 3, 4, 7, 8, 1001] {
+            let a = v(n, 0.5);
+            let bs: Vec<Vec<f64>> = (1..=4).map(|k| v(n, k as f64 * 1.7)).collect();
+            let want: Vec<f64> = bs.iter().map(|b| dot(&a, b)).collect();
+            assert_eq!(dots(&a, [&bs[0]]), [want[0]]);
+            assert_eq!(dots(&a, [&bs[0], &bs[1]]), [want[0], want[1]]);
+            assert_eq!(
+                dots(&a, [&bs[0], &bs[1], &bs[2]]),
+                [want[0], want[1], want[2]]
+            );
+            assert_eq!(
+                dots(&a, [&bs[0], &bs[1], &bs[2], &bs[3]]),
+                [want[0], want[1], want[2], want[3]]
+            );
+        }
+    }
+}

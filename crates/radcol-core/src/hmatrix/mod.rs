@@ -225,28 +225,49 @@ impl HMatrix {
 
     /// y = A x (original indices), leaves in parallel.
     pub fn matvec(&self, x: &[f64], y: &mut [f64]) {
+        self.matvec_many(&[x], &mut [y]);
+    }
+
+    /// ys[c] = A xs[c] for every c, in one pass over the leaves: each leaf
+    /// is read from memory once and applied to every vector.
+    pub fn matvec_many(&self, xs: &[&[f64]], ys: &mut [&mut [f64]]) {
         let (m, n) = self.stats.shape;
-        assert_eq!((x.len(), y.len()), (n, m), "matvec shapes");
-        let xp: Vec<f64> = self.col_order.iter().map(|&j| x[j]).collect();
+        assert_eq!(xs.len(), ys.len(), "as many products as vectors");
+        assert!(
+            xs.iter().all(|x| x.len() == n) && ys.iter().all(|y| y.len() == m),
+            "matvec shapes"
+        );
+        let k = xs.len();
+        if m == 0 || k == 0 {
+            return;
+        }
+        let xp: Vec<Vec<f64>> = xs
+            .iter()
+            .map(|x| self.col_order.iter().map(|&j| x[j]).collect())
+            .collect();
         let yp = self
             .leaves
             .par_iter()
             .fold(
-                || vec![0.0; m],
+                || vec![0.0; m * k],
                 |mut acc, l| {
-                    l.apply_add(&xp, &mut acc);
+                    for (x, y) in xp.iter().zip(acc.chunks_exact_mut(m)) {
+                        l.apply_add(x, y);
+                    }
                     acc
                 },
             )
             .reduce(
-                || vec![0.0; m],
+                || vec![0.0; m * k],
                 |mut a, b| {
                     a.iter_mut().zip(&b).for_each(|(x, y)| *x += y);
                     a
                 },
             );
-        for (p, &i) in self.row_order.iter().enumerate() {
-            y[i] = yp[p];
+        for (y, yp) in ys.iter_mut().zip(yp.chunks_exact(m)) {
+            for (p, &i) in self.row_order.iter().enumerate() {
+                y[i] = yp[p];
+            }
         }
     }
 }
@@ -382,6 +403,10 @@ impl crate::solve::LinearOperator for HMatrix {
 
     fn apply(&self, x: &[f64], y: &mut [f64]) {
         self.matvec(x, y);
+    }
+
+    fn apply_many(&self, xs: &[&[f64]], ys: &mut [&mut [f64]]) {
+        self.matvec_many(xs, ys);
     }
 }
 

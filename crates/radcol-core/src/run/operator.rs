@@ -339,6 +339,13 @@ impl LinearOperator for GeometricOperator {
             Self::Compressed(h) => h.apply(x, y),
         }
     }
+
+    fn apply_many(&self, xs: &[&[f64]], ys: &mut [&mut [f64]]) {
+        match self {
+            Self::Dense(m) => m.apply_many(xs, ys),
+            Self::Compressed(h) => h.apply_many(xs, ys),
+        }
+    }
 }
 
 #[cfg(test)]

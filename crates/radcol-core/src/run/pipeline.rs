@@ -65,6 +65,7 @@ fn assemble(
     backend: &dyn AssemblyBackend,
     previous: Option<&Previous<'_>>,
     keep_check: bool,
+    channels: usize,
 ) -> Result<Built, Error> {
     let mut decision = decide_now(cfg, disc.len() as u64, disc.mesh().len() as u64)?;
     let compressed = decision.kind == OperatorKind::Compressed;
@@ -98,7 +99,7 @@ fn assemble(
             disc.len(),
             plan_cost,
             cfg.solver,
-            cfg.gmres.restart,
+            channels * (cfg.gmres.restart + 4),
             cfg.estimate,
             disc.mesh().len() * crate::nodes::nodes_per_element(disc.nodes().degree() + 1),
             keep_check,
@@ -336,6 +337,7 @@ impl Stages<'_> {
             self.backend,
             self.previous,
             self.keep_check,
+            problem.channels.len(),
         )?;
         let assembly_s = t.elapsed().as_secs_f64();
         Error::if_cancelled(cfg.progress.as_ref(), "assembly")?;

@@ -14,7 +14,7 @@ use crate::norms::error_norms;
 use crate::problem::Problem;
 use crate::progress::solve_decades;
 use crate::solution::{integrate_nodal, Solution};
-use crate::solve::{gmres_observed, DenseLu, ImplicitRadiosity, LinearOperator, RadiosityOperator};
+use crate::solve::{gmres_radiosity, DenseLu, RadiosityOperator, RadiositySystem};
 use std::ops::ControlFlow;
 use std::sync::Arc;
 
@@ -96,72 +96,40 @@ impl<'a> Relighter<'a> {
     }
 
     /// Solves every channel's system for its nodal ρ and E, from `guess`
-    /// (one vector per channel) where given; LU factors are shared between
-    /// channels, and calls, with equal ρ.
+    /// (one vector per channel) where given: GMRES on all channels in
+    /// lockstep (one pass over Gm per iteration for all of them), or LU
+    /// with factors shared between channels, and calls, with equal ρ.
     pub(crate) fn solve_fields(
         &mut self,
         problem: &Problem,
         fields: Vec<NodalFields>,
         guess: Option<&[Vec<f64>]>,
     ) -> Result<Vec<ChannelResult>, Error> {
-        let mut channels = Vec::new();
-        let cfg = &self.cfg;
-        let lu_cache = &mut self.lu;
-        let decades = solve_decades(cfg.gmres.rel_tol);
-        if let Some(p) = &cfg.progress {
+        let decades = solve_decades(self.cfg.gmres.rel_tol);
+        if let Some(p) = &self.cfg.progress {
             p.start("solve", problem.channels.len() as u64 * decades);
         }
-        for (c, (ch, (rho, emission))) in problem.channels.iter().zip(fields).enumerate() {
-            let mut x = match guess.and_then(|g| g.get(c)) {
+        let mut xs: Vec<Vec<f64>> = fields
+            .iter()
+            .enumerate()
+            .map(|(c, (_, emission))| match guess.and_then(|g| g.get(c)) {
                 Some(g) if g.len() == emission.len() => g.clone(),
                 _ => emission.clone(),
-            };
-            // The dense matrix's fused row products, or products through
-            // the compressed operator.
-            let (dense_op, implicit_op);
-            let op: &dyn LinearOperator = match self.operator.dense() {
-                Some(gm) => {
-                    dense_op = RadiosityOperator::new(gm, &rho)?;
-                    &dense_op
-                }
-                None => {
-                    implicit_op = ImplicitRadiosity::new(self.operator, &rho)?;
-                    &implicit_op
-                }
-            };
-            let (iterations, growth, condition, at_rounding_floor) = match cfg.solver {
-                SolverKind::Gmres => {
-                    let info = gmres_watched(op, &emission, &mut x, cfg, decades)?;
-                    (
-                        info.iterations,
-                        Some(info.growth),
-                        None,
-                        info.at_rounding_floor,
-                    )
-                }
-                SolverKind::Lu => {
-                    Error::if_cancelled(cfg.progress.as_ref(), "solve")?;
-                    let Some(gm) = self.operator.dense() else {
-                        return Err(InputError::CompressedLu.into());
-                    };
-                    if lu_cache.as_ref().is_none_or(|(r, _, _)| *r != rho) {
-                        // The old factors go first: a channel with other ρ
-                        // (Cornell's green after red) held two copies at once.
-                        drop(lu_cache.take());
-                        let lu = DenseLu::factor_radiosity(&RadiosityOperator::new(gm, &rho)?)?;
-                        let kappa = lu.condition_estimate();
-                        *lu_cache = Some((rho.clone(), lu, kappa));
-                    }
-                    let (_, lu, kappa) = lu_cache.as_ref().expect("just built");
-                    lu.solve_in_place(&mut x)?;
-                    if let Some(p) = &cfg.progress {
-                        p.advance(decades);
-                    }
-                    (0, None, Some(*kappa), false)
-                }
-            };
-            let residual = true_residual(op, &x, &emission);
-            if !residual.is_finite() {
+            })
+            .collect();
+        let reports = match self.cfg.solver {
+            SolverKind::Gmres => self.gmres_all(&fields, &mut xs, decades)?,
+            SolverKind::Lu => fields
+                .iter()
+                .zip(&mut xs)
+                .map(|((rho, emission), x)| self.lu(rho, emission, x, decades))
+                .collect::<Result<_, _>>()?,
+        };
+        let mut channels = Vec::new();
+        for (((ch, (rho, emission)), x), solver) in
+            problem.channels.iter().zip(fields).zip(xs).zip(reports)
+        {
+            if !solver.residual.is_finite() {
                 return Err(crate::solve::SolveError::NonFinite.into());
             }
             let integral_e = integrate_nodal(&self.disc, &emission);
@@ -173,14 +141,7 @@ impl<'a> Relighter<'a> {
                 solution,
                 rho,
                 emission,
-                solver: SolverReport {
-                    kind: cfg.solver,
-                    iterations,
-                    residual,
-                    growth,
-                    condition,
-                    at_rounding_floor,
-                },
+                solver,
                 errors: None,
                 estimate: None,
                 limited: None,
@@ -188,45 +149,107 @@ impl<'a> Relighter<'a> {
         }
         Ok(channels)
     }
-}
 
-/// GMRES on one channel, reporting each decade its residual falls to
-/// `cfg.progress` (`decades` per channel in all) and stopping when it asks.
-fn gmres_watched(
-    op: &dyn LinearOperator,
-    b: &[f64],
-    x: &mut [f64],
-    cfg: &SolveConfig,
-    decades: u64,
-) -> Result<crate::solve::GmresInfo, Error> {
-    let progress = cfg.progress.as_ref();
-    let mut shown = 0u64;
-    let result = gmres_observed(op, b, x, &cfg.gmres, &mut |_, residual| {
-        let Some(p) = progress else {
-            return ControlFlow::Continue(());
-        };
-        let reached = if residual > 0.0 {
-            ((-residual.log10()).floor().max(0.0) as u64).min(decades)
-        } else {
-            decades
-        };
-        if reached > shown {
-            p.advance(reached - shown);
-            shown = reached;
+    /// GMRES on every channel at once ([`gmres_radiosity`]), each channel
+    /// reporting the decades its residual falls to `cfg.progress`
+    /// (`decades` per channel) and stopping when it asks.
+    fn gmres_all(
+        &self,
+        fields: &[NodalFields],
+        xs: &mut [Vec<f64>],
+        decades: u64,
+    ) -> Result<Vec<SolverReport>, Error> {
+        let progress = self.cfg.progress.as_ref();
+        let mut shown = vec![0u64; fields.len()];
+        let mut systems: Vec<RadiositySystem> = fields
+            .iter()
+            .zip(xs.iter_mut())
+            .map(|((rho, b), x)| RadiositySystem { rho, b, x })
+            .collect();
+        let results = gmres_radiosity(
+            self.operator,
+            &mut systems,
+            &self.cfg.gmres,
+            &mut |c, _, residual| {
+                let Some(p) = progress else {
+                    return ControlFlow::Continue(());
+                };
+                let reached = if residual > 0.0 {
+                    ((-residual.log10()).floor().max(0.0) as u64).min(decades)
+                } else {
+                    decades
+                };
+                if reached > shown[c] {
+                    p.advance(reached - shown[c]);
+                    shown[c] = reached;
+                }
+                if p.cancelled() {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                }
+            },
+        );
+        let mut reports = Vec::new();
+        for (result, shown) in results.into_iter().zip(shown) {
+            let info = match result {
+                Err(crate::solve::SolveError::Stopped { .. }) => {
+                    return Err(Error::Cancelled { stage: "solve" })
+                }
+                r => r?,
+            };
+            // A converged channel counts all its decades (GMRES may stop
+            // short of the last one at the rounding floor, or pass several
+            // in one step).
+            if let Some(p) = progress {
+                p.advance(decades - shown);
+            }
+            reports.push(SolverReport {
+                kind: SolverKind::Gmres,
+                iterations: info.iterations,
+                // GMRES's own: the true residual of the returned x.
+                residual: info.residual,
+                growth: Some(info.growth),
+                condition: None,
+                at_rounding_floor: info.at_rounding_floor,
+            });
         }
-        if p.cancelled() {
-            ControlFlow::Break(())
-        } else {
-            ControlFlow::Continue(())
-        }
-    });
-    // A converged channel counts all its decades (GMRES may stop short of
-    // the last one at the rounding floor, or pass several in one step).
-    if let (Some(p), Ok(_)) = (progress, &result) {
-        p.advance(decades - shown);
+        Ok(reports)
     }
-    match result {
-        Err(crate::solve::SolveError::Stopped { .. }) => Err(Error::Cancelled { stage: "solve" }),
-        r => Ok(r?),
+
+    /// One channel by LU on the dense matrix, refactored only when ρ
+    /// changes (the old factors go first: a channel with other ρ, Cornell's
+    /// green after red, held two copies at once).
+    fn lu(
+        &mut self,
+        rho: &[f64],
+        emission: &[f64],
+        x: &mut [f64],
+        decades: u64,
+    ) -> Result<SolverReport, Error> {
+        Error::if_cancelled(self.cfg.progress.as_ref(), "solve")?;
+        let Some(gm) = self.operator.dense() else {
+            return Err(InputError::CompressedLu.into());
+        };
+        let op = RadiosityOperator::new(gm, rho)?;
+        if self.lu.as_ref().is_none_or(|(r, _, _)| r != rho) {
+            drop(self.lu.take());
+            let lu = DenseLu::factor_radiosity(&op)?;
+            let kappa = lu.condition_estimate();
+            self.lu = Some((rho.to_vec(), lu, kappa));
+        }
+        let (_, lu, kappa) = self.lu.as_ref().expect("just built");
+        lu.solve_in_place(x)?;
+        if let Some(p) = &self.cfg.progress {
+            p.advance(decades);
+        }
+        Ok(SolverReport {
+            kind: SolverKind::Lu,
+            iterations: 0,
+            residual: true_residual(&op, x, emission),
+            growth: None,
+            condition: Some(*kappa),
+            at_rounding_floor: false,
+        })
     }
 }

@@ -192,14 +192,15 @@ pub struct MemoryUse {
 
 impl MemoryUse {
     /// The prediction for N `unknowns`, a plan of `plan_bytes`, `solver`
-    /// (with GMRES's `restart`), and the estimate when `estimate` (keeping
+    /// (GMRES keeping `krylov` vectors of N: `restart` + 4 per channel, the
+    /// channels run in lockstep), and the estimate when `estimate` (keeping
     /// `check_rows` rows of N when `keep_check`).
     #[allow(clippy::too_many_arguments)]
     pub fn predict(
         unknowns: usize,
         plan_bytes: u64,
         solver: SolverKind,
-        restart: usize,
+        krylov: usize,
         estimate: bool,
         check_rows: usize,
         keep_check: bool,
@@ -209,7 +210,7 @@ impl MemoryUse {
         let matrix_bytes = 8.0 * n * n;
         let solver_bytes = match solver {
             SolverKind::Lu => matrix_bytes,
-            SolverKind::Gmres => 8.0 * n * (restart as f64 + 4.0),
+            SolverKind::Gmres => 8.0 * n * krylov as f64,
         };
         let check_bytes = 8.0 * check_rows as f64 * n;
         let estimate_bytes = if estimate {
@@ -300,19 +301,20 @@ mod tests {
 
     #[test]
     fn the_peak_is_the_matrix_and_the_larger_of_solver_and_estimate() {
-        // N = 1000: 8 MB of matrix; LU 8 MB more; GMRES (restart 30) 34·8 kB.
-        let lu = MemoryUse::predict(1000, 5_000_000, SolverKind::Lu, 30, true, 2000, false);
+        // N = 1000: 8 MB of matrix; LU 8 MB more; GMRES (restart 30, one
+        // channel) 34·8 kB.
+        let lu = MemoryUse::predict(1000, 5_000_000, SolverKind::Lu, 34, true, 2000, false);
         let to_come = lu.predicted_peak_bytes - lu.after_plan_bytes;
         assert_eq!(
             (lu.matrix_bytes, lu.solver_bytes, lu.estimate_bytes),
             (8e6, 8e6, 5e6)
         );
         assert_eq!(to_come, 16e6);
-        let gm = MemoryUse::predict(1000, 5_000_000, SolverKind::Gmres, 30, true, 2000, true);
+        let gm = MemoryUse::predict(1000, 5_000_000, SolverKind::Gmres, 34, true, 2000, true);
         // The estimate's plan and its 2000 kept check rows win over GMRES.
         assert_eq!(gm.estimate_bytes, 5e6 + 16e6);
         assert_eq!(gm.predicted_peak_bytes - gm.after_plan_bytes, 8e6 + 21e6);
-        let none = MemoryUse::predict(1000, 5_000_000, SolverKind::Gmres, 30, false, 2000, true);
+        let none = MemoryUse::predict(1000, 5_000_000, SolverKind::Gmres, 34, false, 2000, true);
         assert_eq!(
             none.predicted_peak_bytes - none.after_plan_bytes,
             8e6 + 8.0 * 1000.0 * 34.0

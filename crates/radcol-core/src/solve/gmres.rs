@@ -113,142 +113,241 @@ pub fn gmres_observed(
     params: &GmresParams,
     observe: &mut dyn FnMut(usize, f64) -> ControlFlow<()>,
 ) -> Result<GmresInfo, SolveError> {
-    let n = op.dim();
-    for len in [b.len(), x.len()] {
-        if len != n {
-            return Err(SolveError::DimensionMismatch {
-                expected: n,
-                found: len,
-            });
+    let mut krylov = match Krylov::start(op.dim(), b, x, params)? {
+        Started::Running(k) => k,
+        Started::Solved(info) => {
+            x.fill(0.0);
+            return Ok(info);
         }
-    }
-    if !all_finite(b) || !all_finite(x) {
-        return Err(SolveError::NonFinite);
-    }
-    let scale = max_abs(b);
-    if scale == 0.0 {
-        x.fill(0.0);
-        return Ok(GmresInfo {
-            iterations: 0,
-            restarts: 0,
-            residual: 0.0,
-            growth: 0.0,
-            at_rounding_floor: false,
-        });
-    }
-    let b: Vec<f64> = b.iter().map(|v| v / scale).collect();
-    x.iter_mut().for_each(|v| *v /= scale);
-    let info = cycles(op, &b, x, params, observe);
-    unscale(x, scale)?;
+    };
+    let info = loop {
+        let (v, w) = krylov.product();
+        op.apply(v, w);
+        if let Some(done) = krylov.advance(observe) {
+            break done;
+        }
+    };
+    krylov.finish(x)?;
     info
 }
 
-/// GMRES(m) cycles on a right-hand side of order 1 (`max |b_i| = 1`).
-fn cycles(
-    op: &dyn LinearOperator,
-    b: &[f64],
-    x: &mut [f64],
-    params: &GmresParams,
-    observe: &mut dyn FnMut(usize, f64) -> ControlFlow<()>,
-) -> Result<GmresInfo, SolveError> {
-    let n = op.dim();
-    let b_norm = dot(b, b).sqrt();
-    let tol = params.rel_tol * b_norm;
-    let m = params.restart.clamp(1, n);
-
-    // Workspace, allocated once: basis V (m+1 vectors, contiguous), the
-    // Hessenberg matrix H ((m+1) × m, column j at h[j*(m+1)..]), the Givens
-    // rotations, the rotated right-hand side g and the residual scratch r.
-    let mut basis = vec![0.0; (m + 1) * n];
-    let ld = m + 1;
-    let mut h = vec![0.0; ld * m];
-    let mut cs = vec![0.0; m];
-    let mut sn = vec![0.0; m];
-    let mut g = vec![0.0; m + 1];
-    let mut r = vec![0.0; n];
-
-    let mut iterations = 0usize;
-    let mut cycles = 0usize;
-    // The largest ||A v|| over unit Krylov vectors v: a lower bound of ||A||.
-    let mut a_norm = 0.0f64;
-    loop {
-        let beta = residual(op, b, x, &mut r)?;
-        let x_norm = dot(x, x).sqrt();
-        let floor = ROUNDING_FLOOR * f64::EPSILON * (a_norm * x_norm + b_norm);
-        if beta <= tol || beta <= floor {
-            return Ok(GmresInfo {
-                iterations,
-                restarts: cycles.saturating_sub(1),
-                residual: beta / b_norm,
-                growth: a_norm * x_norm / b_norm,
-                at_rounding_floor: beta > tol,
-            });
-        }
-        if iterations >= params.max_iters {
-            return Err(SolveError::NotConverged {
-                iterations,
-                residual: beta / b_norm,
-            });
-        }
-        cycles += 1;
-
-        // v_0 = r / beta, g = beta e_1.
-        for (v, &ri) in basis[..n].iter_mut().zip(&r) {
-            *v = ri / beta;
-        }
-        g.fill(0.0);
-        g[0] = beta;
-
-        // Arnoldi steps; k = number of columns of H in the least-squares problem.
-        let mut k = 0;
-        for j in 0..m {
-            if iterations >= params.max_iters {
-                break;
-            }
-            iterations += 1;
-            let (done, rest) = basis.split_at_mut((j + 1) * n);
-            let w = &mut rest[..n];
-            op.apply(&done[j * n..], w);
-            if !all_finite(w) {
-                return Err(SolveError::NonFinite);
-            }
-            a_norm = a_norm.max(dot(w, w).sqrt());
-            let col = &mut h[j * ld..(j + 1) * ld];
-            let h_next = orthogonalise(done, w, col, j);
-            if !rotate(col, &mut cs, &mut sn, &mut g, j) {
-                // A v_j is in span(v_0..v_{j-1}) and adds nothing: the
-                // triangular system would be singular, so drop column j.
-                break;
-            }
-            k = j + 1;
-            if observe(iterations, g[j + 1].abs() / b_norm).is_break() {
-                return Err(SolveError::Stopped { iterations });
-            }
-
-            if g[j + 1].abs() <= tol.max(floor) || h_next == 0.0 {
-                break;
-            }
-        }
-
-        update(&h, ld, &mut g, k, &basis, x);
-    }
+/// What [`Krylov::start`] found: an iteration to run, or b = 0 (x = 0).
+pub(super) enum Started<'p> {
+    Running(Box<Krylov<'p>>),
+    Solved(GmresInfo),
 }
 
-/// The true residual r = b - A x; returns its norm.
-fn residual(
-    op: &dyn LinearOperator,
-    b: &[f64],
-    x: &[f64],
-    r: &mut [f64],
-) -> Result<f64, SolveError> {
-    op.apply(x, r);
-    if !all_finite(r) {
-        return Err(SolveError::NonFinite);
+/// One system's restarted GMRES(m), advanced one operator product at a
+/// time so that a driver can compute the products of several systems
+/// together ([`super::gmres_radiosity`]) or one by one ([`gmres_observed`]):
+/// [`Krylov::product`] lends the vector to multiply and the place for its
+/// product, [`Krylov::advance`] takes the product and says whether the
+/// iteration is over.
+///
+/// The iteration runs on a right-hand side of order 1 (`b / s`, `x / s`,
+/// `s = max |b_i|`); [`Krylov::finish`] scales the solution back.
+///
+/// Workspace, allocated once: basis V (m+1 vectors, contiguous), the
+/// Hessenberg matrix H ((m+1) × m, column j at h[j*(m+1)..]), the Givens
+/// rotations, the rotated right-hand side g and the residual scratch r.
+pub(super) struct Krylov<'p> {
+    params: &'p GmresParams,
+    scale: f64,
+    b: Vec<f64>,
+    x: Vec<f64>,
+    b_norm: f64,
+    tol: f64,
+    m: usize,
+    basis: Vec<f64>,
+    h: Vec<f64>,
+    cs: Vec<f64>,
+    sn: Vec<f64>,
+    g: Vec<f64>,
+    r: Vec<f64>,
+    iterations: usize,
+    cycles: usize,
+    /// The largest ||A v|| over unit Krylov vectors v: a lower bound of ||A||.
+    a_norm: f64,
+    /// The rounding floor of this cycle (see [`ROUNDING_FLOOR`]).
+    floor: f64,
+    /// The Arnoldi step awaiting A v_j, or None while the cycle's true
+    /// residual awaits A x.
+    step: Option<usize>,
+    /// Columns of H in the least-squares problem.
+    k: usize,
+}
+
+impl<'p> Krylov<'p> {
+    /// Checks `b` and the initial `x` against the dimension `n` and for
+    /// finite values; the first product asked for is A x.
+    pub(super) fn start(
+        n: usize,
+        b: &[f64],
+        x: &[f64],
+        params: &'p GmresParams,
+    ) -> Result<Started<'p>, SolveError> {
+        for len in [b.len(), x.len()] {
+            if len != n {
+                return Err(SolveError::DimensionMismatch {
+                    expected: n,
+                    found: len,
+                });
+            }
+        }
+        if !all_finite(b) || !all_finite(x) {
+            return Err(SolveError::NonFinite);
+        }
+        let scale = max_abs(b);
+        if scale == 0.0 {
+            return Ok(Started::Solved(GmresInfo {
+                iterations: 0,
+                restarts: 0,
+                residual: 0.0,
+                growth: 0.0,
+                at_rounding_floor: false,
+            }));
+        }
+        let b: Vec<f64> = b.iter().map(|v| v / scale).collect();
+        let b_norm = dot(&b, &b).sqrt();
+        let m = params.restart.clamp(1, n);
+        Ok(Started::Running(Box::new(Self {
+            params,
+            scale,
+            x: x.iter().map(|v| v / scale).collect(),
+            b,
+            b_norm,
+            tol: params.rel_tol * b_norm,
+            m,
+            basis: vec![0.0; (m + 1) * n],
+            h: vec![0.0; (m + 1) * m],
+            cs: vec![0.0; m],
+            sn: vec![0.0; m],
+            g: vec![0.0; m + 1],
+            r: vec![0.0; n],
+            iterations: 0,
+            cycles: 0,
+            a_norm: 0.0,
+            floor: 0.0,
+            step: None,
+            k: 0,
+        })))
     }
-    for (ri, &bi) in r.iter_mut().zip(b) {
-        *ri = bi - *ri;
+
+    /// The vector to multiply by A and the place for its product.
+    pub(super) fn product(&mut self) -> (&[f64], &mut [f64]) {
+        let n = self.r.len();
+        match self.step {
+            None => (&self.x, &mut self.r),
+            Some(j) => {
+                let (done, rest) = self.basis.split_at_mut((j + 1) * n);
+                (&done[j * n..], &mut rest[..n])
+            }
+        }
     }
-    Ok(dot(r, r).sqrt())
+
+    /// Takes the product [`Krylov::product`] asked for; `Some` with the
+    /// outcome when the iteration is over, `None` when it needs another.
+    /// `observe(iterations, estimate)` is called after every Arnoldi step.
+    pub(super) fn advance(
+        &mut self,
+        observe: &mut dyn FnMut(usize, f64) -> ControlFlow<()>,
+    ) -> Option<Result<GmresInfo, SolveError>> {
+        match self.step {
+            None => self.begin_cycle(),
+            Some(j) => self.arnoldi(j, observe),
+        }
+    }
+
+    /// Writes the solution, scaled back, into `x` (the best iterate, or the
+    /// start of the cycle, when the iteration failed or was stopped).
+    ///
+    /// # Errors
+    /// [`SolveError::Overflow`] when the solution is beyond the largest f64.
+    pub(super) fn finish(&self, x: &mut [f64]) -> Result<(), SolveError> {
+        x.copy_from_slice(&self.x);
+        unscale(x, self.scale)
+    }
+
+    /// r holds A x: the cycle's true residual decides convergence, or a
+    /// new cycle starts from v_0 = r / β.
+    fn begin_cycle(&mut self) -> Option<Result<GmresInfo, SolveError>> {
+        if !all_finite(&self.r) {
+            return Some(Err(SolveError::NonFinite));
+        }
+        for (ri, &bi) in self.r.iter_mut().zip(&self.b) {
+            *ri = bi - *ri;
+        }
+        let beta = dot(&self.r, &self.r).sqrt();
+        let x_norm = dot(&self.x, &self.x).sqrt();
+        self.floor = ROUNDING_FLOOR * f64::EPSILON * (self.a_norm * x_norm + self.b_norm);
+        if beta <= self.tol || beta <= self.floor {
+            return Some(Ok(GmresInfo {
+                iterations: self.iterations,
+                restarts: self.cycles.saturating_sub(1),
+                residual: beta / self.b_norm,
+                growth: self.a_norm * x_norm / self.b_norm,
+                at_rounding_floor: beta > self.tol,
+            }));
+        }
+        if self.iterations >= self.params.max_iters {
+            return Some(Err(SolveError::NotConverged {
+                iterations: self.iterations,
+                residual: beta / self.b_norm,
+            }));
+        }
+        self.cycles += 1;
+        // v_0 = r / beta, g = beta e_1.
+        for (v, &ri) in self.basis.iter_mut().zip(&self.r) {
+            *v = ri / beta;
+        }
+        self.g.fill(0.0);
+        self.g[0] = beta;
+        self.k = 0;
+        self.iterations += 1;
+        self.step = Some(0);
+        None
+    }
+
+    /// basis[j+1] holds A v_j: Arnoldi step j, then the next step's product,
+    /// or the cycle's update of x and the next cycle's A x.
+    fn arnoldi(
+        &mut self,
+        j: usize,
+        observe: &mut dyn FnMut(usize, f64) -> ControlFlow<()>,
+    ) -> Option<Result<GmresInfo, SolveError>> {
+        let (n, ld) = (self.r.len(), self.m + 1);
+        let (done, rest) = self.basis.split_at_mut((j + 1) * n);
+        let w = &mut rest[..n];
+        if !all_finite(w) {
+            return Some(Err(SolveError::NonFinite));
+        }
+        self.a_norm = self.a_norm.max(dot(w, w).sqrt());
+        let col = &mut self.h[j * ld..(j + 1) * ld];
+        let h_next = orthogonalise(done, w, col, j);
+        // A v_j in span(v_0..v_{j-1}) adds nothing: the triangular system
+        // would be singular, so column j is dropped and the cycle ends.
+        let mut more = rotate(col, &mut self.cs, &mut self.sn, &mut self.g, j);
+        if more {
+            self.k = j + 1;
+            if observe(self.iterations, self.g[j + 1].abs() / self.b_norm).is_break() {
+                return Some(Err(SolveError::Stopped {
+                    iterations: self.iterations,
+                }));
+            }
+            more = self.g[j + 1].abs() > self.tol.max(self.floor)
+                && h_next != 0.0
+                && j + 1 < self.m
+                && self.iterations < self.params.max_iters;
+        }
+        if more {
+            self.iterations += 1;
+            self.step = Some(j + 1);
+        } else {
+            update(&self.h, ld, &mut self.g, self.k, &self.basis, &mut self.x);
+            self.step = None;
+        }
+        None
+    }
 }
 
 /// Column j of the Hessenberg matrix: w (= A v_j) is orthogonalised against

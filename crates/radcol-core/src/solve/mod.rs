@@ -11,12 +11,14 @@
 //! [`GmresParams`] in, [`GmresInfo`] or [`SolveError`] out.
 
 mod gmres;
+mod lockstep;
 mod lu;
 
 pub use gmres::{gmres, gmres_observed, GmresInfo, GmresParams, ROUNDING_FLOOR};
+pub use lockstep::{gmres_radiosity, RadiositySystem};
 pub use lu::DenseLu;
 
-use crate::matrix::{dot, DenseMatrix};
+use crate::matrix::{dot, dots, DenseMatrix};
 use rayon::prelude::*;
 
 /// A square linear operator `y = A x` (dense, matrix-free or GPU-backed).
@@ -25,6 +27,18 @@ pub trait LinearOperator: Sync {
     fn dim(&self) -> usize;
     /// `y = A x`; `x.len() == y.len() == dim()`.
     fn apply(&self, x: &[f64], y: &mut [f64]);
+
+    /// `ys[c] = A xs[c]` for every c, each product exactly as
+    /// [`LinearOperator::apply`] would give it. Operators that keep their
+    /// entries in memory override it to read them once for all the
+    /// vectors (the products are memory-bound: three colour channels then
+    /// cost about one); the default applies them one by one.
+    fn apply_many(&self, xs: &[&[f64]], ys: &mut [&mut [f64]]) {
+        assert_eq!(xs.len(), ys.len(), "as many products as vectors");
+        for (x, y) in xs.iter().zip(ys.iter_mut()) {
+            self.apply(x, y);
+        }
+    }
 }
 
 /// A dense matrix as an operator. Only square matrices are operators:
@@ -42,6 +56,39 @@ impl LinearOperator for DenseMatrix {
             "a DenseMatrix used as a LinearOperator must be square"
         );
         self.matvec(x, y);
+    }
+
+    /// One pass over the rows: each row, read once from memory, is
+    /// multiplied by every vector while it is in cache.
+    fn apply_many(&self, xs: &[&[f64]], ys: &mut [&mut [f64]]) {
+        assert_eq!(self.nrows(), self.ncols(), "a square DenseMatrix");
+        assert_eq!(xs.len(), ys.len(), "as many products as vectors");
+        let n = self.nrows();
+        if n == 0 || xs.is_empty() {
+            return;
+        }
+        assert!(xs.iter().all(|x| x.len() == n) && ys.iter().all(|y| y.len() == n));
+        let k = xs.len();
+        let mut rows = vec![0.0; n * k];
+        rows.par_chunks_exact_mut(k)
+            .zip(self.as_slice().par_chunks_exact(n))
+            .for_each(|(out, row)| {
+                // Up to four vectors per pass over the row (registers).
+                for (o, x) in out.chunks_mut(4).zip(xs.chunks(4)) {
+                    match *x {
+                        [a] => o.copy_from_slice(&dots(row, [a])),
+                        [a, b] => o.copy_from_slice(&dots(row, [a, b])),
+                        [a, b, c] => o.copy_from_slice(&dots(row, [a, b, c])),
+                        [a, b, c, d] => o.copy_from_slice(&dots(row, [a, b, c, d])),
+                        _ => unreachable!("chunks of one to four"),
+                    }
+                }
+            });
+        for (c, y) in ys.iter_mut().enumerate() {
+            for (yi, r) in y.iter_mut().zip(rows.chunks_exact(k)) {
+                *yi = r[c];
+            }
+        }
     }
 }
 
