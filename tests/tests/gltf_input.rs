@@ -5,7 +5,8 @@
 //! world positions and material values the glTF encodes (computed here from
 //! the f32 data and the node matrices in f64) gives the same radiosity to
 //! 1e-12. The writer below is independent of the loader: serde_json and raw
-//! little-endian buffers.
+//! little-endian buffers. Its TEXCOORD_1 (a lightmap layout) is the scene's
+//! texture coordinates, not its tiling TEXCOORD_0.
 
 use glam::{DMat4, DQuat, DVec3};
 use radcol_core::assembly::CpuBackend;
@@ -51,6 +52,12 @@ fn stored(m: DMat4) -> DMat4 {
 
 /// Writes `scene` as `dir/cornell.gltf` (+ `.bin`) and, from what that glTF
 /// encodes, `dir/cornell.obj` (+ `.mtl`).
+/// The lightmap coordinates (TEXCOORD_1) written for corner `k` of
+/// triangle `t` of patch `i`: exact in f32, inside [0, 1].
+fn lightmap_uv(i: usize, t: usize, k: usize) -> [f32; 2] {
+    [(i as f32 + 0.25 * k as f32) / 64.0, (t as f32 + 0.5) / 16.0]
+}
+
 fn write_both(scene: &Scene, dir: &std::path::Path) {
     let parent = stored(DMat4::from_translation(DVec3::new(100.0, -50.0, 25.0)));
     let mut bin: Vec<u8> = Vec::new();
@@ -62,7 +69,8 @@ fn write_both(scene: &Scene, dir: &std::path::Path) {
         let world = parent * c;
         let inverse = world.inverse();
         let mut positions: Vec<[f32; 3]> = Vec::new();
-        for t in &patch.triangles {
+        let mut texcoords: Vec<[f32; 2]> = Vec::new();
+        for (n, t) in patch.triangles.iter().enumerate() {
             // A mirrored node draws its triangles reversed.
             let order = if c.determinant() < 0.0 {
                 [0, 2, 1]
@@ -71,6 +79,7 @@ fn write_both(scene: &Scene, dir: &std::path::Path) {
             };
             for k in order {
                 positions.push(inverse.transform_point3(t[k]).as_vec3().to_array());
+                texcoords.push(lightmap_uv(i, n, k));
             }
         }
         let offset = bin.len();
@@ -83,6 +92,16 @@ fn write_both(scene: &Scene, dir: &std::path::Path) {
         for k in 0..positions.len() as u32 {
             bin.extend_from_slice(&k.to_le_bytes());
         }
+        // TEXCOORD_0 a tiling set (outside [0, 1]), TEXCOORD_1 the lightmap's.
+        let uv_offset = bin.len();
+        for (k, uv) in texcoords.iter().enumerate() {
+            for x in [4.0 * k as f32, -1.5] {
+                bin.extend_from_slice(&x.to_le_bytes());
+            }
+            for x in uv {
+                bin.extend_from_slice(&x.to_le_bytes());
+            }
+        }
         let (lo, hi) = positions.iter().fold(
             ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]),
             |(lo, hi), p| {
@@ -93,10 +112,13 @@ fn write_both(scene: &Scene, dir: &std::path::Path) {
             },
         );
         views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": index_offset - offset, "target": 34962}));
-        views.push(json!({"buffer": 0, "byteOffset": index_offset, "byteLength": bin.len() - index_offset, "target": 34963}));
-        accessors.push(json!({"bufferView": 2 * i, "componentType": 5126, "count": positions.len(), "type": "VEC3", "min": lo, "max": hi}));
-        accessors.push(json!({"bufferView": 2 * i + 1, "componentType": 5125, "count": positions.len(), "type": "SCALAR"}));
-        meshes.push(json!({"primitives": [{"attributes": {"POSITION": 2 * i}, "indices": 2 * i + 1, "material": scene.patch_material[i]}]}));
+        views.push(json!({"buffer": 0, "byteOffset": index_offset, "byteLength": uv_offset - index_offset, "target": 34963}));
+        views.push(json!({"buffer": 0, "byteOffset": uv_offset, "byteLength": bin.len() - uv_offset, "byteStride": 16, "target": 34962}));
+        accessors.push(json!({"bufferView": 3 * i, "componentType": 5126, "count": positions.len(), "type": "VEC3", "min": lo, "max": hi}));
+        accessors.push(json!({"bufferView": 3 * i + 1, "componentType": 5125, "count": positions.len(), "type": "SCALAR"}));
+        accessors.push(json!({"bufferView": 3 * i + 2, "componentType": 5126, "count": positions.len(), "type": "VEC2"}));
+        accessors.push(json!({"bufferView": 3 * i + 2, "byteOffset": 8, "componentType": 5126, "count": positions.len(), "type": "VEC2"}));
+        meshes.push(json!({"primitives": [{"attributes": {"POSITION": 4 * i, "TEXCOORD_0": 4 * i + 2, "TEXCOORD_1": 4 * i + 3}, "indices": 4 * i + 1, "material": scene.patch_material[i]}]}));
         nodes.push(
             json!({"name": format!("p{i}"), "mesh": i, "matrix": c.as_mat4().to_cols_array()}),
         );
@@ -203,6 +225,21 @@ fn gltf_cornell_box_matches_its_obj_twin() {
     assert_eq!(sorted(&g), sorted(&o));
     assert_eq!(g.triangle_count(), o.triangle_count());
     assert!(g.warnings.is_empty(), "{:?}", g.warnings);
+    // TEXCOORD_1 (the lightmap set) wins over the tiling TEXCOORD_0, corner
+    // by corner through the mirrored nodes' rewinding; the OBJ has no vt.
+    let uvs = g.uvs.as_ref().expect("every triangle has TEXCOORD_1");
+    for (i, patch) in uvs.iter().enumerate() {
+        for (t, corners) in patch.iter().enumerate() {
+            for (k, uv) in corners.iter().enumerate() {
+                assert_eq!(
+                    *uv,
+                    lightmap_uv(i, t, k).map(f64::from),
+                    "patch {i} triangle {t}"
+                );
+            }
+        }
+    }
+    assert!(o.uvs.is_none());
     let cam = g.camera.expect("the glTF camera");
     assert!(
         (cam.eye - DVec3::new(278.0, 273.0, -800.0)).length() < 1e-9,

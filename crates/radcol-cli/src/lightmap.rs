@@ -24,7 +24,7 @@ pub struct Baked {
 
 /// Unwraps `mesh`'s surface into a `size`² atlas and bakes `solutions`.
 fn bake_all(mesh: &Mesh, solutions: &[&Solution], look: &Look, size: u32) -> Result<Baked> {
-    let atlas = Atlas::new(mesh.surface(), size).context("--lightmap")?;
+    let atlas = look.atlas(mesh.surface(), size).context("--lightmap")?;
     let image = bake(mesh, solutions, &atlas).context("--lightmap")?;
     let pixels = tone_map(&image, &look.tone);
     let mut png = Vec::new();
@@ -64,16 +64,20 @@ pub fn output(
 fn write(o: &Output, lm: &Baked, mesh: &Mesh, look: &Look) -> Result<String> {
     let shown = o.file.path.display().to_string();
     let size = lm.atlas.size;
-    let charts = lm.atlas.charts.len();
+    let charts = if lm.atlas.is_input() {
+        "the scene's texture coordinates".to_string()
+    } else {
+        format!("{} charts", lm.atlas.charts.len())
+    };
     let mut f = create(&o.file)?;
     let what = match o.kind {
         OutputKind::LightmapExr => {
             export::exr::write(f, &lm.image).with_context(|| format!("writing {shown}"))?;
-            return Ok(format!("{size}×{size} linear lightmap, {charts} charts"));
+            return Ok(format!("{size}×{size} linear lightmap, {charts}"));
         }
         OutputKind::LightmapPng => {
             f.write_all(&lm.png)?;
-            format!("{size}×{size} lightmap, {charts} charts")
+            format!("{size}×{size} lightmap, {charts}")
         }
         OutputKind::Glb | OutputKind::Gltf => {
             let layout = layout(mesh, look);
@@ -91,7 +95,7 @@ fn write(o: &Output, lm: &Baked, mesh: &Mesh, look: &Look) -> Result<String> {
             }
             .with_context(|| format!("writing {shown}"))?;
             format!(
-                "{} objects with a {size}×{size} lightmap",
+                "{} objects with a {size}×{size} lightmap ({charts})",
                 layout.objects.len()
             )
         }

@@ -237,6 +237,9 @@ pub struct Look {
     pub objects: bool,
     /// The lightmap's size in texels, when one is baked.
     pub lightmap: Option<u32>,
+    /// The scene's texture coordinates, the lightmap's layout when given
+    /// (none with --lightmap-unwrap).
+    pub lightmap_uvs: Option<Vec<Vec<[[f64; 2]; 3]>>>,
     /// Vertex meshes on the scene's triangles (and how corners are shared).
     pub input_vertices: Option<radcol_core::render::Corners>,
 }
@@ -257,7 +260,26 @@ pub fn look(spec: &LookSpec, s: &Setup) -> Look {
             .unwrap_or(1.0),
         objects: s.loaded.scene().is_some(),
         lightmap: spec.lightmap,
+        lightmap_uvs: (spec.lightmap.is_some() && !spec.lightmap_unwrap)
+            .then(|| s.loaded.scene().and_then(|sc| sc.uvs.clone()))
+            .flatten(),
         input_vertices: spec.input_vertices,
+    }
+}
+
+impl Look {
+    /// The lightmap's atlas of `surface` at `size` texels: the scene's
+    /// texture coordinates when it has them, else planar charts.
+    pub fn atlas(
+        &self,
+        surface: &radcol_core::geometry::Surface,
+        size: u32,
+    ) -> Result<radcol_core::render::lightmap::Atlas, radcol_core::render::RenderError> {
+        use radcol_core::render::lightmap::Atlas;
+        match &self.lightmap_uvs {
+            Some(uvs) => Atlas::from_uvs(surface, uvs, size),
+            None => Atlas::new(surface, size),
+        }
     }
 }
 

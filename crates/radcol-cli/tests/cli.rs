@@ -1963,6 +1963,82 @@ fn lightmaps_and_lightmapped_gltf() {
     );
 }
 
+/// `--lightmap` on a scene with texture coordinates bakes into them: the
+/// report says so and the glTF's TEXCOORD_0 are the OBJ's `vt` (v flipped);
+/// `--lightmap-unwrap` makes charts instead; a layout with two triangles
+/// on one texel is refused before the solve.
+#[test]
+fn lightmaps_in_the_scenes_texture_coordinates() {
+    let dir = scratch("lightmap-uv");
+    let path = |n: &str| dir.join(n).to_str().unwrap().to_string();
+    std::fs::write(
+        dir.join("m.mtl"),
+        "newmtl w\nKd 0.5 0.5 0.5\nnewmtl l\nKd 0 0 0\nKe 1 1 1\n",
+    )
+    .unwrap();
+    // A 2 × 1 floor mapped to u = x / 4, v (up) = y / 2, and a lamp above it
+    // mapped to the atlas's right half, or onto the floor's texels.
+    let plates = |lamp_u: f64| {
+        format!(
+            "mtllib m.mtl\nv 0 0 0\nv 2 0 0\nv 2 1 0\nv 0 1 0\nv 0 0 1\nv 2 0 1\nv 2 1 1\nv 0 1 1\n\
+             vt 0 0\nvt 0.5 0\nvt 0.5 0.5\nvt 0 0.5\n\
+             vt {lamp_u} 0\nvt {} 0\nvt {} 0.5\nvt {lamp_u} 0.5\n\
+             g floor\nusemtl w\nf 1/1 2/2 3/3 4/4\ng lamp\nusemtl l\nf 5/5 8/8 7/7 6/6\n",
+            lamp_u + 0.4,
+            lamp_u + 0.4
+        )
+    };
+    let (obj, glb) = (path("p.obj"), path("p.glb"));
+    std::fs::write(&obj, plates(0.55)).unwrap();
+    let common = ["--level", "1", "--no-estimate", "--lightmap-size", "64"];
+    let out = radcol_ok(&[&["solve", &obj, "-o", &glb][..], &common[..]].concat());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("64×64 lightmap (the scene's texture coordinates)"),
+        "{text}"
+    );
+    let (doc, buffers, _) = gltf::import(&glb).unwrap();
+    let mut seen = 0;
+    for mesh in doc.meshes() {
+        let prim = mesh.primitives().next().unwrap();
+        let reader = prim.reader(|b| Some(&buffers[b.index()]));
+        let uvs: Vec<[f32; 2]> = reader.read_tex_coords(0).unwrap().into_f32().collect();
+        for (p, uv) in reader.read_positions().unwrap().zip(uvs) {
+            let want = if p[2] == 0.0 {
+                [p[0] / 4.0, 1.0 - p[1] / 2.0]
+            } else {
+                [0.55 + 0.2 * p[0], 1.0 - p[1] / 2.0]
+            };
+            assert!(
+                (uv[0] - want[0]).abs() < 1e-6 && (uv[1] - want[1]).abs() < 1e-6,
+                "{p:?}: {uv:?}"
+            );
+            seen += 1;
+        }
+    }
+    assert_eq!(seen, 12);
+    let out = radcol_ok(
+        &[
+            &["solve", &obj, "--lightmap-unwrap", "-o", &path("q.glb")][..],
+            &common[..],
+        ]
+        .concat(),
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("64×64 lightmap (2 charts)"), "{text}");
+    std::fs::write(&obj, plates(0.1)).unwrap();
+    assert_one_line_error(
+        &["solve", &obj, "--lightmap", &path("x.exr")],
+        2,
+        &[
+            "--lightmap",
+            "texture coordinates overlap",
+            "floor/w",
+            "lamp/l",
+        ],
+    );
+}
+
 /// `--vertices input|input-shared`: glTF vertex colours on the scene's own
 /// triangles (three corners each, or shared within a material), the same
 /// triangles as the lightmapped glTF's, in the same 8 objects.

@@ -157,12 +157,19 @@ pub struct SolveArgs {
     pub tonemap: TonemapArg,
 
     /// Bake u_n into a UV lightmap and write it to FILE: .exr (linear radiance u/pi) or
-    /// .png (tone-mapped); repeatable. The scene's triangles are unwrapped into planar
-    /// charts (one per flat face of each material) packed in one square atlas. With a
-    /// lightmap, .glb/.gltf outputs hold the scene's own triangles with texture coordinates
-    /// and the lightmap as their unlit texture, instead of vertex colours on radcol's mesh.
+    /// .png (tone-mapped); repeatable. The layout is the scene's own texture coordinates
+    /// when every triangle has them in [0, 1] (glTF TEXCOORD_1, else TEXCOORD_0; OBJ vt),
+    /// else the triangles are unwrapped into planar charts (one per flat face of each
+    /// material) packed in one square atlas. With a lightmap, .glb/.gltf outputs hold the
+    /// scene's own triangles with texture coordinates and the lightmap as their unlit
+    /// texture, instead of vertex colours on radcol's mesh.
     #[arg(help_heading = "Output", long, value_name = "FILE.exr|.png")]
     pub lightmap: Vec<PathBuf>,
+
+    /// Unwrap the lightmap into radcol's planar charts even when the scene has texture
+    /// coordinates.
+    #[arg(help_heading = "Output", long)]
+    pub lightmap_unwrap: bool,
 
     /// Lightmap width and height in texels (16..=16384); given alone, .glb/.gltf outputs
     /// are lightmapped without a separate file [default: 1024].

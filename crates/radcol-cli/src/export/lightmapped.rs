@@ -64,7 +64,7 @@ fn parts(l: &Lightmapped<'_>) -> Result<Vec<Part>> {
             for x in v {
                 part.positions.push(f32x3(x));
                 part.normals.push(f32x3(n));
-                part.uvs.push(l.atlas.uv(chart, x));
+                part.uvs.push(l.atlas.uv_on(chart, t, x));
             }
         }
     }

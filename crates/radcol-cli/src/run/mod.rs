@@ -67,7 +67,7 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
     if let Some(size) = look.lightmap {
         // Unwrapped before the solve, so a surface that cannot be (curved)
         // is refused before any work.
-        radcol_core::render::lightmap::Atlas::new(&s.problem.surface, size).map_err(|e| {
+        look.atlas(&s.problem.surface, size).map_err(|e| {
             let why = e.to_string();
             let why = why.strip_prefix("lightmap: ").unwrap_or(&why).to_string();
             crate::error::bad_input(format!("--lightmap: {why}"))

@@ -84,6 +84,9 @@ pub struct LookSpec {
     /// The lightmap's size in texels, when one is baked (--lightmap or
     /// --lightmap-size).
     pub lightmap: Option<u32>,
+    /// --lightmap-unwrap: planar charts even when the scene has texture
+    /// coordinates.
+    pub lightmap_unwrap: bool,
     /// --vertices: the vertex meshes on the scene's triangles, and with
     /// which corners shared, instead of on the elements.
     pub input_vertices: Option<radcol_core::render::Corners>,
@@ -272,6 +275,7 @@ pub(super) fn look(a: &SolveArgs) -> Result<LookSpec, BadInput> {
         tessellation: a.tessellation,
         metres_per_unit: a.units.as_deref().map(units).transpose()?,
         lightmap: lightmap_size(a)?,
+        lightmap_unwrap: a.lightmap_unwrap,
         input_vertices: match a.vertices {
             VerticesArg::Elements => None,
             VerticesArg::Input => Some(radcol_core::render::Corners::Split),

@@ -89,6 +89,53 @@ impl SceneBuilder {
         triangles: &[[u32; 3]],
         material: usize,
     ) -> Result<(), SceneError> {
+        self.add(group, positions, None, triangles, material)
+    }
+
+    /// Adds an indexed triangle mesh with texture coordinates per vertex
+    /// (`uvs[i]` of `positions[i]`; v down from the image's top edge, as in
+    /// glTF): lightmaps then bake into these coordinates
+    /// ([`Scene::uvs`](super::Scene::uvs)) when every triangle of the scene
+    /// has them.
+    pub fn add_mesh_with_uvs(
+        &mut self,
+        group: &str,
+        positions: &[DVec3],
+        uvs: &[[f64; 2]],
+        triangles: &[[u32; 3]],
+        material: usize,
+    ) -> Result<(), SceneError> {
+        if uvs.len() != positions.len() {
+            return Err(SceneError::Syntax {
+                at: format!("mesh '{group}'"),
+                message: format!(
+                    "{} texture coordinates for {} positions: one per vertex",
+                    uvs.len(),
+                    positions.len()
+                ),
+            });
+        }
+        if let Some((i, uv)) = uvs
+            .iter()
+            .enumerate()
+            .find(|(_, uv)| !uv.iter().all(|x| x.is_finite()))
+        {
+            return Err(SceneError::Syntax {
+                at: format!("mesh '{group}' vertex {i}"),
+                message: format!("texture coordinates ({}, {}) are not finite", uv[0], uv[1]),
+            });
+        }
+        self.add(group, positions, Some(uvs), triangles, material)
+    }
+
+    fn add(
+        &mut self,
+        group: &str,
+        positions: &[DVec3],
+        uvs: Option<&[[f64; 2]]>,
+        triangles: &[[u32; 3]],
+        material: usize,
+    ) -> Result<(), SceneError> {
         let first = self.faces_per_group.get(group).copied().unwrap_or(0);
         let at = |f: usize| format!("mesh '{group}' face {}", first + f);
         if material >= self.materials.len() {
@@ -126,6 +173,7 @@ impl SceneBuilder {
                 material,
                 vertices: v,
                 at: at(f),
+                uv: uvs.map(|uv| t.map(|i| uv[i as usize])),
             });
         }
         self.triangles.extend(new);

@@ -173,8 +173,20 @@ impl Walk<'_> {
                 t.swap(1, 2);
             }
         }
-        self.builder
-            .add_mesh_f64(group, &positions, &tris, material)
+        // TEXCOORD_1 is the lightmap set by convention (three.js, Unity's
+        // exporters); a mesh with one set has it in TEXCOORD_0.
+        let uvs: Option<Vec<[f64; 2]>> = reader
+            .read_tex_coords(1)
+            .or_else(|| reader.read_tex_coords(0))
+            .map(|t| t.into_f32().map(|[u, v]| [u as f64, v as f64]).collect());
+        match uvs {
+            Some(uvs) if uvs.len() == positions.len() => self
+                .builder
+                .add_mesh_with_uvs(group, &positions, &uvs, &tris, material),
+            _ => self
+                .builder
+                .add_mesh_f64(group, &positions, &tris, material),
+        }
     }
 
     /// The radcol material of glTF material `m` (added on first use).

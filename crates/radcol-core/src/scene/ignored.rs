@@ -33,7 +33,6 @@ impl Ignored {
 /// What an ignored keyword would have meant, and what radcol does instead.
 fn why(keyword: &str) -> &'static str {
     match keyword {
-        "vt" => "texture coordinates (radcol samples no textures)",
         "vn" => "vertex normals (faces are flat; their lit side is the counter-clockwise one, whatever the normals say)",
         "s" => "smoothing groups (shading normals only; faces are flat)",
         "Ka" | "Ks" | "Ns" | "Ni" | "illum" | "Pr" | "Pm" | "Ps" | "Pc" | "Pcr" | "aniso" => {
@@ -55,8 +54,8 @@ mod tests {
     #[test]
     fn one_warning_per_kind() {
         let mut i = Ignored::default();
-        i.note("vt", 4);
-        i.note("vt", 9);
+        i.note("vn", 4);
+        i.note("vn", 9);
         i.note("map_Kd", 2);
         let w = i.warnings("a.obj");
         assert_eq!(w.len(), 2, "{w:?}");
@@ -65,7 +64,7 @@ mod tests {
             "{w:?}"
         );
         assert!(
-            w[1].starts_with("a.obj:4: 2 'vt' statements ignored: texture"),
+            w[1].starts_with("a.obj:4: 2 'vn' statements ignored: vertex normals"),
             "{w:?}"
         );
     }

@@ -224,11 +224,26 @@ fn triangulate(
             // orientation (e2 = n × e1).
             (area > tol * tol).then(|| RawTriangle {
                 vertices: q.map(|x| f.to_3d(x)),
+                uv: t.uv.map(|uv| q.map(|x| interpolate(&c, &uv, x))),
                 ..t.clone()
             })
         })
         .collect();
     (pieces.len() >= 2).then_some(pieces)
+}
+
+/// The value at `x` of the affine function taking the triangle `c`'s
+/// corners to `uv`.
+fn interpolate(c: &[[f64; 2]; 3], uv: &[[f64; 2]; 3], x: [f64; 2]) -> [f64; 2] {
+    let (e1, e2) = (
+        [c[1][0] - c[0][0], c[1][1] - c[0][1]],
+        [c[2][0] - c[0][0], c[2][1] - c[0][1]],
+    );
+    let d = [x[0] - c[0][0], x[1] - c[0][1]];
+    let det = e1[0] * e2[1] - e1[1] * e2[0];
+    let s = (d[0] * e2[1] - d[1] * e2[0]) / det;
+    let t = (e1[0] * d[1] - e1[1] * d[0]) / det;
+    [0, 1].map(|a| uv[0][a] + s * (uv[1][a] - uv[0][a]) + t * (uv[2][a] - uv[0][a]))
 }
 
 #[cfg(test)]
@@ -237,6 +252,7 @@ mod tests {
 
     fn raw(group: &str, v: [DVec3; 3]) -> RawTriangle {
         RawTriangle {
+            uv: None,
             group: group.into(),
             material: 0,
             vertices: v,

@@ -33,6 +33,7 @@ mod facing;
 mod gltf;
 mod ignored;
 pub mod imprint;
+mod mtl;
 mod obj;
 mod overlap;
 mod polygon;
@@ -259,6 +260,13 @@ pub struct Scene {
     /// Metres per scene unit, when known: glTF input is in metres (1), the
     /// built-in Cornell box in millimetres (0.001); OBJ files do not say.
     pub metres_per_unit: Option<f64>,
+    /// The input's texture coordinates of every surface triangle
+    /// (`uvs[patch][triangle]`, the corners of `surface.patches[patch]
+    /// .triangles[triangle]`, v down from the top as in glTF), when every
+    /// triangle has them: OBJ `vt`, glTF TEXCOORD_1 (the lightmap set by
+    /// convention) or else TEXCOORD_0. Pieces of imprinted triangles get
+    /// their triangle's coordinates interpolated. Lightmaps bake into them.
+    pub uvs: Option<Vec<Vec<[[f64; 2]; 3]>>>,
 }
 
 impl Scene {

@@ -13,7 +13,7 @@
 //! warning. Polygons are triangulated whatever their convexity
 //! ([`super::polygon`]); a face may have up to [`MAX_FACE_VERTICES`] vertices.
 
-use super::validate::{check_material, finish, RawScene};
+use super::validate::{finish, RawScene};
 use super::{Material, Scene, SceneError};
 use glam::DVec3;
 use std::collections::HashMap;
@@ -105,11 +105,16 @@ pub(super) struct ScanFace {
     pub(super) group: String,
     pub(super) material: usize,
     pub(super) vertices: Vec<usize>,
+    /// The texture coordinates of its vertices (v down), when all have them.
+    pub(super) uvs: Option<Vec<[f64; 2]>>,
 }
+
+/// The texture coordinates of a face's vertices, when all have them.
+type FaceUvs = Option<Vec<[f64; 2]>>;
 
 type Resolver<'a> = dyn Fn(&str) -> Result<(String, String), (PathBuf, String)> + 'a;
 
-fn syntax(at: String, message: impl Into<String>) -> SceneError {
+pub(super) fn syntax(at: String, message: impl Into<String>) -> SceneError {
     SceneError::Syntax {
         at,
         message: message.into(),
@@ -117,7 +122,7 @@ fn syntax(at: String, message: impl Into<String>) -> SceneError {
 }
 
 /// The rest of a statement after its keyword, trimmed.
-fn rest<'a>(line: &'a str, keyword: &str) -> &'a str {
+pub(super) fn rest<'a>(line: &'a str, keyword: &str) -> &'a str {
     line[keyword.len()..].trim()
 }
 
@@ -125,6 +130,7 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let at = |line: usize| format!("{file}:{line}");
     let mut positions: Vec<DVec3> = Vec::new();
+    let mut texcoords: Vec<[f64; 2]> = Vec::new();
     let mut materials: Vec<Material> = Vec::new();
     let mut by_name: HashMap<String, usize> = HashMap::new();
     let mut libs: HashMap<String, String> = HashMap::new();
@@ -146,6 +152,7 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
         let mut pass = true;
         match keyword {
             "v" => positions.push(parse_vertex(line, words, &at(line_no))?),
+            "vt" => texcoords.push(parse_texcoord(line, words, &at(line_no))?),
             "f" => {
                 let (at, group) = (&at(line_no), group.clone());
                 faces.push(scan_face(
@@ -154,7 +161,7 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
                     line_no,
                     group,
                     material,
-                    &positions,
+                    (&positions, &texcoords),
                     &mut warnings,
                 )?);
             }
@@ -227,10 +234,10 @@ fn scan_face<'a>(
     line_no: usize,
     group: String,
     material: Option<usize>,
-    positions: &[DVec3],
+    (positions, texcoords): (&[DVec3], &[[f64; 2]]),
     warnings: &mut Vec<String>,
 ) -> Result<ScanFace, SceneError> {
-    let vertices = parse_face(words, positions, at)?;
+    let (vertices, uvs) = parse_face(words, positions, texcoords, at)?;
     let Some(material) = material else {
         return Err(SceneError::NoMaterial {
             at: at.to_string(),
@@ -245,7 +252,38 @@ fn scan_face<'a>(
         group,
         material,
         vertices,
+        uvs,
     })
+}
+
+/// A `vt u [v [w]]` statement: finite coordinates, stored as (u, 1 - v),
+/// v down from the image's top edge as in glTF (OBJ's v points up).
+fn parse_texcoord<'a>(
+    line: &str,
+    words: impl Iterator<Item = &'a str>,
+    at: &str,
+) -> Result<[f64; 2], SceneError> {
+    let nums: Vec<f64> = words
+        .map(|w| w.parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| {
+            syntax(
+                at.to_string(),
+                format!("cannot parse texture coordinates '{line}'"),
+            )
+        })?;
+    match nums[..] {
+        [] => Err(syntax(
+            at.to_string(),
+            format!("texture coordinates need u: '{line}'"),
+        )),
+        _ if nums.iter().any(|x| !x.is_finite()) => Err(syntax(
+            at.to_string(),
+            format!("texture coordinates are not finite: '{line}'"),
+        )),
+        [u] => Ok([u, 1.0]),
+        [u, v, ..] => Ok([u, 1.0 - v]),
+    }
 }
 
 /// Reads the material library `lib` of an `mtllib` statement through
@@ -265,7 +303,7 @@ fn read_mtllib(
         mtl,
         message,
     })?;
-    materials.extend(parse_mtl(&label, &mtl_text, warnings)?);
+    materials.extend(super::mtl::parse_mtl(&label, &mtl_text, warnings)?);
     Ok(mtl_text)
 }
 
@@ -316,9 +354,11 @@ pub const MAX_FACE_VERTICES: usize = 4096;
 fn parse_face<'a>(
     words: impl Iterator<Item = &'a str>,
     positions: &[DVec3],
+    texcoords: &[[f64; 2]],
     at: &str,
-) -> Result<Vec<usize>, SceneError> {
+) -> Result<(Vec<usize>, FaceUvs), SceneError> {
     let mut vertices = Vec::new();
+    let mut uvs = Some(Vec::new());
     for w in words {
         if vertices.len() == MAX_FACE_VERTICES {
             return Err(syntax(
@@ -344,6 +384,15 @@ fn parse_face<'a>(
             });
         }
         vertices.push(resolved as usize);
+        match w.split('/').nth(1).filter(|t| !t.is_empty()) {
+            Some(t) => {
+                let uv = texcoord(t, texcoords, at)?;
+                if let Some(uvs) = &mut uvs {
+                    uvs.push(uv);
+                }
+            }
+            None => uvs = None,
+        }
     }
     if vertices.len() < 3 {
         return Err(SceneError::TooFewVertices {
@@ -351,7 +400,26 @@ fn parse_face<'a>(
             count: vertices.len(),
         });
     }
-    Ok(vertices)
+    Ok((vertices, uvs))
+}
+
+/// The texture coordinates of a face vertex's `vt` index `t` (1-based or
+/// negative, resolved against the `texcoords` read so far).
+fn texcoord(t: &str, texcoords: &[[f64; 2]], at: &str) -> Result<[f64; 2], SceneError> {
+    let index: i64 = t
+        .parse()
+        .map_err(|_| syntax(at.to_string(), format!("cannot parse texture index '{t}'")))?;
+    let n = texcoords.len() as i64;
+    let resolved = if index < 0 { n + index } else { index - 1 };
+    if index == 0 || resolved < 0 || resolved >= n {
+        return Err(syntax(
+            at.to_string(),
+            format!(
+                "texture coordinate index {index} is out of range ({n} vt statements before it)"
+            ),
+        ));
+    }
+    Ok(texcoords[resolved as usize])
 }
 
 /// The warning for a polygon of more than three vertices that is not planar.
@@ -388,108 +456,4 @@ fn non_planarity(p: &[DVec3]) -> Option<f64> {
         .fold(0.0, f64::max)
         / diameter;
     (off > 1e-6).then_some(off)
-}
-
-/// Parses an MTL text: every material needs `Kd` (three numbers in [0, 1));
-/// `Ke` (three numbers ≥ 0) defaults to 0; other statements are tallied
-/// into one warning per kind.
-fn parse_mtl(
-    file: &str,
-    text: &str,
-    warnings: &mut Vec<String>,
-) -> Result<Vec<Material>, SceneError> {
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    struct Pending {
-        name: String,
-        line: usize,
-        kd: Option<([f64; 3], usize)>,
-        ke: Option<([f64; 3], usize)>,
-    }
-    let at = |line: usize| format!("{file}:{line}");
-    let close = |p: Pending| -> Result<Material, SceneError> {
-        let Some((rho, kd_line)) = p.kd else {
-            return Err(SceneError::MissingKd {
-                at: at(p.line),
-                material: p.name,
-            });
-        };
-        let (emission, ke_line) = p.ke.unwrap_or(([0.0; 3], p.line));
-        let m = Material {
-            name: p.name,
-            rho,
-            emission,
-        };
-        check_material(
-            &Material {
-                emission: [0.0; 3],
-                ..m.clone()
-            },
-            &at(kd_line),
-        )?;
-        check_material(
-            &Material {
-                rho: [0.0; 3],
-                ..m.clone()
-            },
-            &at(ke_line),
-        )?;
-        Ok(m)
-    };
-    let mut out = Vec::new();
-    let mut current: Option<Pending> = None;
-    let mut ignored = super::ignored::Ignored::default();
-    for (i, raw) in text.lines().enumerate() {
-        let line_no = i + 1;
-        let line = raw.trim();
-        let mut words = line.split_whitespace();
-        let keyword = words.next().unwrap_or("");
-        let three = |words: std::str::SplitWhitespace| -> Result<[f64; 3], SceneError> {
-            let nums: Vec<f64> = words
-                .map(|w| w.parse::<f64>())
-                .collect::<Result<_, _>>()
-                .map_err(|_| syntax(at(line_no), format!("cannot parse '{line}'")))?;
-            <[f64; 3]>::try_from(nums).map_err(|_| {
-                syntax(
-                    at(line_no),
-                    format!("'{line}': {keyword} needs exactly three numbers (r g b)"),
-                )
-            })
-        };
-        match keyword {
-            "newmtl" => {
-                if let Some(p) = current.take() {
-                    out.push(close(p)?);
-                }
-                let name = rest(line, keyword);
-                if name.is_empty() {
-                    return Err(syntax(at(line_no), "newmtl without a name"));
-                }
-                current = Some(Pending {
-                    name: name.into(),
-                    line: line_no,
-                    kd: None,
-                    ke: None,
-                });
-            }
-            "Kd" | "Ke" | "Ka" | "Ks" => {
-                let v = three(words)?;
-                let Some(p) = current.as_mut() else {
-                    return Err(syntax(at(line_no), format!("{keyword} before any newmtl")));
-                };
-                match keyword {
-                    "Kd" => p.kd = Some((v, line_no)),
-                    "Ke" => p.ke = Some((v, line_no)),
-                    k => ignored.note(k, line_no),
-                }
-            }
-            "" => {}
-            k if k.starts_with('#') => {}
-            k => ignored.note(k, line_no),
-        }
-    }
-    warnings.extend(ignored.warnings(file));
-    if let Some(p) = current.take() {
-        out.push(close(p)?);
-    }
-    Ok(out)
 }

@@ -729,7 +729,7 @@ fn triangles_facing_nothing_are_named() {
 #[test]
 fn ignored_statements_are_warned_once_per_kind() {
     let mtl = "newmtl white\nKd 0.5 0.5 0.5\nNs 10\nmap_Kd wood.png\nNs 20\n";
-    let (p, r) = load(&square("vt 0 0\nvt 1 0\ns 1\n"), mtl);
+    let (p, r) = load(&square("vn 0 0 1\nvn 0 0 1\ns 1\n"), mtl);
     let s = alone(r.unwrap());
     let obj = p.display().to_string();
     let mtl = p.with_file_name("t.mtl").display().to_string();
@@ -737,7 +737,7 @@ fn ignored_statements_are_warned_once_per_kind() {
         format!("{mtl}:4: 1 'map_Kd' statement ignored: a texture map"),
         format!("{mtl}:3: 2 'Ns' statements ignored: not a diffuse property"),
         format!("{obj}:12: 1 's' statement ignored: smoothing groups"),
-        format!("{obj}:10: 2 'vt' statements ignored: texture coordinates"),
+        format!("{obj}:10: 2 'vn' statements ignored: vertex normals"),
     ];
     assert_eq!(s.warnings.len(), want.len(), "{:?}", s.warnings);
     for w in want {
@@ -746,5 +746,101 @@ fn ignored_statements_are_warned_once_per_kind() {
             "{w} in {:?}",
             s.warnings
         );
+    }
+}
+
+/// OBJ texture coordinates reach the scene: per surface triangle, in the
+/// triangle's corner order, v flipped to glTF's top-down convention, from
+/// `v/vt` and `v/vt/vn` entries with positive or negative indices. A scene
+/// where only some faces have them keeps none and says so; an index
+/// beyond the vt statements is refused by line.
+#[test]
+fn obj_texture_coordinates_follow_the_triangles() {
+    let head = "mtllib t.mtl\nv 0 0 0\nv 2 0 0\nv 2 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 0.5\nvt 0 0.5\ng floor\nusemtl white\n";
+    for face in ["f 1/1 2/2 3/3 4/4", "f 1/-4/1 2/-3/1 3/-2/1 4/-1/1"] {
+        let (_, r) = load(&format!("{head}{face}\n"), MTL);
+        let s = alone(r.unwrap());
+        let uvs = s.uvs.as_ref().expect("every triangle has vt");
+        let patch = &s.surface.patches[0];
+        assert_eq!(uvs[0].len(), patch.triangles.len());
+        for (tri, uv) in patch.triangles.iter().zip(&uvs[0]) {
+            for (x, uv) in tri.iter().zip(uv) {
+                // u = x / 2, v (down) = 1 - y / 2
+                assert_eq!(*uv, [x.x / 2.0, 1.0 - x.y / 2.0], "{face}");
+            }
+        }
+    }
+    let (_, r) = load(&format!("{head}f 1/1 2/2 3/3\nf 1 3 4\n"), MTL);
+    let s = r.unwrap();
+    assert!(s.uvs.is_none());
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains(":13: 1 of 2 triangles have no texture coordinates")),
+        "{:?}",
+        s.warnings
+    );
+    let msg = err_at(&format!("{head}f 1/1 2/5 3/3\n"), MTL, "t.obj", 12);
+    assert!(
+        msg.contains("texture coordinate index 5 is out of range (4 vt"),
+        "{msg}"
+    );
+}
+
+/// A face split by an imprinted contact line gives its pieces the
+/// texture coordinates of their corners' positions on the face.
+#[test]
+fn imprinted_pieces_interpolate_texture_coordinates() {
+    use crate::scene::SceneBuilder;
+    let mut b = SceneBuilder::new("contact");
+    let white = b
+        .add_material(Material::diffuse("white", [0.5; 3]))
+        .unwrap();
+    // A 4 × 4 floor with u = x / 4, v = y / 4, and a 1 × 1 × 1 box standing
+    // on it at (1..2, 1..2), whose bottom is open: its walls imprint the floor.
+    let floor = [
+        DVec3::new(0., 0., 0.),
+        DVec3::new(4., 0., 0.),
+        DVec3::new(4., 4., 0.),
+        DVec3::new(0., 4., 0.),
+    ];
+    let uv: Vec<[f64; 2]> = floor.iter().map(|p| [p.x / 4.0, p.y / 4.0]).collect();
+    b.add_mesh_with_uvs("floor", &floor, &uv, &[[0, 1, 2], [0, 2, 3]], white)
+        .unwrap();
+    let c = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    let walls = [
+        c(1., 1., 0.),
+        c(2., 1., 0.),
+        c(2., 2., 0.),
+        c(1., 2., 0.),
+        c(1., 1., 1.),
+        c(2., 1., 1.),
+        c(2., 2., 1.),
+        c(1., 2., 1.),
+    ];
+    let wall_uv: Vec<[f64; 2]> = walls.iter().map(|p| [p.x / 4.0, p.z]).collect();
+    let faces = [
+        [0, 1, 5],
+        [0, 5, 4],
+        [1, 2, 6],
+        [1, 6, 5],
+        [2, 3, 7],
+        [2, 7, 6],
+        [3, 0, 4],
+        [3, 4, 7],
+        [4, 5, 6],
+        [4, 6, 7],
+    ];
+    b.add_mesh_with_uvs("box", &walls, &wall_uv, &faces, white)
+        .unwrap();
+    let s = b.build().unwrap();
+    assert!(s.imprinted.triangles > 0, "{:?}", s.imprinted);
+    let uvs = s.uvs.as_ref().unwrap();
+    let floor_patch = &s.surface.patches[0];
+    assert!(floor_patch.triangles.len() > 2);
+    for (tri, uv) in floor_patch.triangles.iter().zip(&uvs[0]) {
+        for (x, uv) in tri.iter().zip(uv) {
+            assert!((uv[0] - x.x / 4.0).abs() < 1e-12 && (uv[1] - x.y / 4.0).abs() < 1e-12);
+        }
     }
 }

@@ -91,6 +91,7 @@ pub(super) fn match_tobj(
                     material: face.material,
                     vertices: [points[a], points[b], points[c]],
                     at: at.clone(),
+                    uv: face.uvs.as_ref().map(|u| [u[a], u[b], u[c]]),
                 });
             }
         }

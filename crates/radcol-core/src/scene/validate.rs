@@ -21,6 +21,9 @@ pub(crate) struct RawTriangle {
     pub vertices: [DVec3; 3],
     /// Where it came from, for messages ("a.obj:12", "mesh 'floor' face 3").
     pub at: String,
+    /// Texture coordinates of the vertices (OBJ `vt`, glTF TEXCOORD_n), v
+    /// down from the image's top edge as in glTF.
+    pub uv: Option<[[f64; 2]; 3]>,
 }
 
 /// Everything a loader gathered, before the shared checks.
@@ -158,6 +161,7 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
     let (kept, imprinted) = super::imprint::contact_lines(kept, scale);
 
     let (patches, patch_material) = patches_by_group(&kept, &materials);
+    let uvs = texture_coordinates(&kept, &patches, &mut warnings);
     let surface = Surface {
         name: name.clone(),
         patches,
@@ -173,7 +177,52 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
         source,
         imprinted,
         metres_per_unit: None,
+        uvs,
     })
+}
+
+/// The texture coordinates of every patch triangle, in the patches'
+/// order, when every triangle has them; a warning when only some do.
+fn texture_coordinates(
+    kept: &[RawTriangle],
+    patches: &[Patch],
+    warnings: &mut Vec<String>,
+) -> Option<Vec<Vec<[[f64; 2]; 3]>>> {
+    let with = kept.iter().filter(|t| t.uv.is_some()).count();
+    if with < kept.len() {
+        if with > 0 {
+            let first = kept
+                .iter()
+                .find(|t| t.uv.is_none())
+                .expect("some lack them");
+            warnings.push(format!(
+                "{}: {} of {} triangles have no texture coordinates (this one first): \
+                 lightmaps generate their own charts instead of using the input's",
+                first.at,
+                kept.len() - with,
+                kept.len()
+            ));
+        }
+        return None;
+    }
+    // Patches numbered by first appearance of (group, material), each
+    // with its triangles in input order, as patches_by_group does.
+    let mut patch_of: HashMap<(&str, usize), usize> = HashMap::new();
+    let mut uvs: Vec<Vec<[[f64; 2]; 3]>> = Vec::new();
+    for t in kept {
+        let j = *patch_of
+            .entry((t.group.as_str(), t.material))
+            .or_insert_with(|| {
+                uvs.push(Vec::new());
+                uvs.len() - 1
+            });
+        uvs[j].push(t.uv.expect("all have them"));
+    }
+    debug_assert!(uvs
+        .iter()
+        .zip(patches)
+        .all(|(u, p)| u.len() == p.triangles.len()));
+    Some(uvs)
 }
 
 /// Why a triangle is degenerate, judged by its own size: a sliver (area at

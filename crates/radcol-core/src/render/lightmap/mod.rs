@@ -4,8 +4,10 @@
 //! **Charts.** The triangles of one patch (an object's material) that lie
 //! in one plane form a chart, projected orthographically onto that plane:
 //! no distortion, and a scene of walls and boxes (the Cornell box's faces)
-//! gets one chart per face. Input UVs are not read: every scene is
-//! unwrapped so.
+//! gets one chart per face. Or the input's own texture coordinates
+//! ([`Atlas::from_uvs`], `input.rs`: OBJ `vt`, glTF TEXCOORD_1 or _0), one
+//! chart per patch, when they lie in the unit square; overlapping ones are
+//! refused when baked.
 //!
 //! **Packing.** Charts are placed on shelves (tallest first) in a square
 //! atlas of `size` texels, with a gutter of [`GUTTER`] texels on every side,
@@ -26,6 +28,8 @@ use crate::solution::Solution;
 use glam::DVec3;
 use std::collections::HashMap;
 use std::f64::consts::PI;
+
+mod input;
 
 /// Empty texels around every chart.
 pub const GUTTER: u32 = 2;
@@ -67,6 +71,9 @@ pub struct Atlas {
     pub charts: Vec<Chart>,
     /// The chart of each surface triangle (patch, index in its triangles).
     chart_of: HashMap<(u32, u32), usize>,
+    /// Per patch and triangle, the corners in space and in texture
+    /// coordinates, when the atlas is the input's ([`Atlas::from_uvs`]).
+    input: Option<Vec<Vec<input::Corners>>>,
 }
 
 impl Atlas {
@@ -88,23 +95,9 @@ impl Atlas {
         let mut by_plane: HashMap<(usize, [i64; 4]), usize> = HashMap::new();
         for (j, patch) in surface.patches.iter().enumerate() {
             for (t, tri) in patch.triangles.iter().enumerate() {
-                let v = tri.map(|x| patch.map.map(x));
-                let n = (v[1] - v[0]).cross(v[2] - v[0]);
-                if n.length() == 0.0 {
+                let Some((n, offset)) = plane_of(patch, tri, scale)? else {
                     continue;
-                }
-                let n = n.normalize();
-                let flat = tri.iter().all(|&x| {
-                    let mid = patch.map.map((x + tri[0] + tri[1] + tri[2]) / 4.0);
-                    (mid - v[0]).dot(n).abs() <= 1e-9 * scale
-                });
-                if !flat {
-                    return Err(RenderError::Lightmap(format!(
-                        "patch '{}' is curved: lightmaps are made for flat scenes",
-                        patch.name
-                    )));
-                }
-                let offset = n.dot(v[0]);
+                };
                 let q = |x: f64| (x * 1e9).round() as i64;
                 let key = (j, [q(n.x), q(n.y), q(n.z), q(offset / scale)]);
                 let c = *by_plane.entry(key).or_insert_with(|| {
@@ -124,7 +117,27 @@ impl Atlas {
             density,
             charts,
             chart_of,
+            input: None,
         })
+    }
+
+    /// Atlas coordinates (texels) of `x` on triangle `t` of `chart`: its
+    /// plane's projection, or the input's coordinates interpolated.
+    pub fn texel_on(&self, chart: &Chart, t: usize, x: DVec3) -> [f64; 2] {
+        match &self.input {
+            Some(input) => {
+                let (v, uv) = &input[chart.patch][t];
+                input::interpolate(v, uv, x).map(|a| a * self.size as f64)
+            }
+            None => self.texel(chart, x),
+        }
+    }
+
+    /// glTF texture coordinates (atlas fraction, from the top-left) of `x`
+    /// on triangle `t` of `chart`.
+    pub fn uv_on(&self, chart: &Chart, t: usize, x: DVec3) -> [f32; 2] {
+        self.texel_on(chart, t, x)
+            .map(|a| (a / self.size as f64) as f32)
     }
 
     /// The chart of the surface triangle `t` of patch `patch`.
@@ -156,6 +169,32 @@ impl Atlas {
         let [a, b] = self.texel(chart, x);
         [(a / self.size as f64) as f32, (b / self.size as f64) as f32]
     }
+}
+
+/// The unit normal and offset of a flat surface triangle's plane (None
+/// when it has no area); curved patches are refused.
+fn plane_of(
+    patch: &crate::geometry::Patch,
+    tri: &[DVec3; 3],
+    scale: f64,
+) -> Result<Option<(DVec3, f64)>, RenderError> {
+    let v = tri.map(|x| patch.map.map(x));
+    let n = (v[1] - v[0]).cross(v[2] - v[0]);
+    if n.length() == 0.0 {
+        return Ok(None);
+    }
+    let n = n.normalize();
+    let flat = tri.iter().all(|&x| {
+        let mid = patch.map.map((x + tri[0] + tri[1] + tri[2]) / 4.0);
+        (mid - v[0]).dot(n).abs() <= 1e-9 * scale
+    });
+    if !flat {
+        return Err(RenderError::Lightmap(format!(
+            "patch '{}' is curved: lightmaps are made for flat scenes",
+            patch.name
+        )));
+    }
+    Ok(Some((n, n.dot(v[0]))))
 }
 
 impl Chart {
@@ -269,61 +308,17 @@ pub fn bake(mesh: &Mesh, solutions: &[&Solution], atlas: &Atlas) -> Result<Image
     let mut covered = vec![false; n * n];
     for (k, base) in mesh.base_triangles().into_iter().enumerate() {
         let v = mesh.vertices(k);
-        let Some(chart) = base.and_then(|(j, t)| atlas.chart_of(j, t)) else {
+        let Some((t, chart)) = base.and_then(|(j, t)| Some((t, atlas.chart_of(j, t)?))) else {
             return Err(RenderError::Lightmap(format!(
                 "element {k} lies in no chart (its surface triangle is degenerate or missing)"
             )));
         };
-        let p = v.map(|x| atlas.texel(chart, x));
-        let det =
-            (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]);
-        if det == 0.0 {
-            continue;
-        }
-        let x0 = p
-            .iter()
-            .map(|q| q[0])
-            .fold(f64::INFINITY, f64::min)
-            .floor()
-            .max(0.0) as usize;
-        let x1 = p
-            .iter()
-            .map(|q| q[0])
-            .fold(0.0, f64::max)
-            .ceil()
-            .min(n as f64) as usize;
-        let y0 = p
-            .iter()
-            .map(|q| q[1])
-            .fold(f64::INFINITY, f64::min)
-            .floor()
-            .max(0.0) as usize;
-        let y1 = p
-            .iter()
-            .map(|q| q[1])
-            .fold(0.0, f64::max)
-            .ceil()
-            .min(n as f64) as usize;
-        for y in y0..y1 {
-            for x in x0..x1 {
-                let c = [x as f64 + 0.5, y as f64 + 0.5];
-                // (s, t): barycentric coordinates of the texel centre.
-                let s = ((c[0] - p[0][0]) * (p[2][1] - p[0][1])
-                    - (p[2][0] - p[0][0]) * (c[1] - p[0][1]))
-                    / det;
-                let t = ((p[1][0] - p[0][0]) * (c[1] - p[0][1])
-                    - (c[0] - p[0][0]) * (p[1][1] - p[0][1]))
-                    / det;
-                let eps = 1e-9;
-                if s < -eps || t < -eps || s + t > 1.0 + eps {
-                    continue;
-                }
-                let (s, t) = (s.clamp(0.0, 1.0), t.clamp(0.0, 1.0 - s.clamp(0.0, 1.0)));
-                let u = eval_rgb(solutions, k, s, t);
-                rgb[y * n + x] = u.map(|v| (v / PI) as f32);
-                covered[y * n + x] = true;
-            }
-        }
+        let p = v.map(|x| atlas.texel_on(chart, t as usize, x));
+        raster(p, n, |i, s, r, _| {
+            let u = eval_rgb(solutions, k, s, r);
+            rgb[i] = u.map(|v| (v / PI) as f32);
+            covered[i] = true;
+        });
     }
     let charted: Vec<bool> = covered.clone();
     dilate(&mut rgb, &mut covered, n, DILATION as usize);
@@ -345,6 +340,42 @@ pub fn bake(mesh: &Mesh, solutions: &[&Solution], atlas: &Atlas) -> Result<Image
             .collect(),
         rgb,
     })
+}
+
+/// Calls `texel(index, s, t, inside)` for every texel of an `n`² image whose
+/// centre lies in the triangle `p` (texel coordinates), with the centre's
+/// barycentric coordinates (s, t) and whether it lies inside by a margin
+/// (not on an edge the triangle may share).
+pub(super) fn raster(p: [[f64; 2]; 3], n: usize, mut texel: impl FnMut(usize, f64, f64, bool)) {
+    let det = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]);
+    if det == 0.0 {
+        return;
+    }
+    let range = |a: usize| {
+        let lo = p.iter().map(|q| q[a]).fold(f64::INFINITY, f64::min);
+        let hi = p.iter().map(|q| q[a]).fold(0.0, f64::max);
+        lo.floor().max(0.0) as usize..hi.ceil().min(n as f64) as usize
+    };
+    for y in range(1) {
+        for x in range(0) {
+            let c = [x as f64 + 0.5, y as f64 + 0.5];
+            // (s, t): barycentric coordinates of the texel centre.
+            let s = ((c[0] - p[0][0]) * (p[2][1] - p[0][1])
+                - (p[2][0] - p[0][0]) * (c[1] - p[0][1]))
+                / det;
+            let t = ((p[1][0] - p[0][0]) * (c[1] - p[0][1])
+                - (c[0] - p[0][0]) * (p[1][1] - p[0][1]))
+                / det;
+            let eps = 1e-9;
+            if s < -eps || t < -eps || s + t > 1.0 + eps {
+                continue;
+            }
+            let margin = 1e-6;
+            let inside = s > margin && t > margin && s + t < 1.0 - margin;
+            let (s, t) = (s.clamp(0.0, 1.0), t.clamp(0.0, 1.0 - s.clamp(0.0, 1.0)));
+            texel(y * n + x, s, t, inside);
+        }
+    }
 }
 
 /// Fills empty texels next to covered ones with their covered neighbours'
