@@ -30,7 +30,9 @@ pub use crate::render::{
 };
 pub use crate::run::adapt::{solve_adaptive, AdaptOptions, AdaptOutcome, AdaptStep, StopReason};
 pub use crate::run::{solve, Relighter, SolveConfig, SolveOutcome, SolverKind};
-pub use crate::scene::{builtin, load_gltf, load_obj, Scene, SceneError};
+pub use crate::scene::{
+    builtin, load_gltf, load_obj, Scene, SceneBuilder, SceneError, TriangleOrigin,
+};
 pub use crate::solution::Solution;
 
 use std::path::Path;

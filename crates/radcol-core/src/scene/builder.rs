@@ -2,7 +2,7 @@
 //! embed radcol.
 
 use super::validate::{check_material, finish, RawScene, RawTriangle};
-use super::{Material, Scene, SceneError};
+use super::{Material, Scene, SceneError, TriangleOrigin};
 use crate::camera::Camera;
 use glam::{DVec3, Vec3};
 use std::collections::HashMap;
@@ -174,6 +174,12 @@ impl SceneBuilder {
                 vertices: v,
                 at: at(f),
                 uv: uvs.map(|uv| t.map(|i| uv[i as usize])),
+                origin: TriangleOrigin {
+                    input: self.triangles.len() + f,
+                    vertices: *t,
+                    corners: v,
+                    at: at(f),
+                },
             });
         }
         self.triangles.extend(new);

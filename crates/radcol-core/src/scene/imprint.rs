@@ -253,6 +253,12 @@ mod tests {
     fn raw(group: &str, v: [DVec3; 3]) -> RawTriangle {
         RawTriangle {
             uv: None,
+            origin: crate::scene::TriangleOrigin {
+                input: 0,
+                vertices: [0, 1, 2],
+                corners: v,
+                at: String::new(),
+            },
             group: group.into(),
             material: 0,
             vertices: v,

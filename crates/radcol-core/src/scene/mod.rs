@@ -267,9 +267,42 @@ pub struct Scene {
     /// convention) or else TEXCOORD_0. Pieces of imprinted triangles get
     /// their triangle's coordinates interpolated. Lightmaps bake into them.
     pub uvs: Option<Vec<Vec<[[f64; 2]; 3]>>>,
+    /// The input triangle of every surface triangle (`origins[patch]
+    /// [triangle]`): which one it is, or which one it is a piece of where a
+    /// contact line was imprinted. [`Scene::element_origins`] maps a
+    /// mesh's elements to them.
+    pub origins: Vec<Vec<TriangleOrigin>>,
+}
+
+/// Where a surface triangle came from in the scene's input.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TriangleOrigin {
+    /// The input triangle's position among all the triangles read, in
+    /// order: OBJ faces in file order (a polygon's triangles in turn),
+    /// glTF primitives in node order, `SceneBuilder` meshes as added.
+    pub input: usize,
+    /// Its corners' vertex indices in the input: 0-based OBJ `v` indices,
+    /// or indices into the positions of the glTF primitive or
+    /// `SceneBuilder` mesh.
+    pub vertices: [u32; 3],
+    /// Its corners' positions (the input triangle's, also for a piece).
+    pub corners: [DVec3; 3],
+    /// Where it is written: "file.obj:12", "file.gltf: mesh 'm' face 3",
+    /// "mesh 'floor' face 0".
+    pub at: String,
 }
 
 impl Scene {
+    /// The input triangle of every element of `mesh` (a mesh of this
+    /// scene's surface), through [`Mesh::base_triangles`]; None for an
+    /// element outside every surface triangle (a mesh of another surface).
+    pub fn element_origins(&self, mesh: &crate::mesh::Mesh) -> Vec<Option<&TriangleOrigin>> {
+        mesh.base_triangles()
+            .into_iter()
+            .map(|b| b.and_then(|(j, t)| self.origins.get(j as usize)?.get(t as usize)))
+            .collect()
+    }
+
     /// The colour problem: channels "R", "G", "B" with ρ = Kd and E = Ke per
     /// patch; no exact solution.
     pub fn problem(&self) -> Problem {
@@ -361,8 +394,13 @@ impl Scene {
                 *t = t.map(|v| v * factor);
             }
         }
+        let mut origins = self.origins.clone();
+        for o in origins.iter_mut().flatten() {
+            o.corners = o.corners.map(|v| v * factor);
+        }
         Scene {
             surface: Arc::new(surface),
+            origins,
             camera: self.camera.map(|c| Camera {
                 eye: c.eye * factor,
                 target: c.target * factor,

@@ -844,3 +844,106 @@ fn imprinted_pieces_interpolate_texture_coordinates() {
         }
     }
 }
+
+/// Every surface triangle knows its input triangle: the running index,
+/// the OBJ's 0-based `v` indices of its corners and the line, also through
+/// a polygon's triangulation; imprinted pieces keep the face they were cut
+/// from, and every element of a refined mesh lies inside its origin.
+#[test]
+fn surface_triangles_and_elements_know_their_input_triangle() {
+    let text = "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 0 1 1\ng floor\nusemtl white\nf 1 2 3 4\ng wall\nusemtl white\nf 1 4 6 5\n";
+    let (p, r) = load(text, MTL);
+    let s = r.unwrap();
+    let f = p.display().to_string();
+    let all: Vec<&TriangleOrigin> = s.origins.iter().flatten().collect();
+    assert_eq!(
+        all.iter().map(|o| o.input).collect::<Vec<_>>(),
+        [0, 1, 2, 3]
+    );
+    for (patch, origins) in s.surface.patches.iter().zip(&s.origins) {
+        for (tri, o) in patch.triangles.iter().zip(origins) {
+            assert_eq!(*tri, o.corners, "not imprinted: the piece is the triangle");
+            let positions = [
+                DVec3::ZERO,
+                DVec3::X,
+                DVec3::new(1., 1., 0.),
+                DVec3::Y,
+                DVec3::Z,
+                DVec3::new(0., 1., 1.),
+            ];
+            assert_eq!(o.vertices.map(|v| positions[v as usize]), o.corners);
+        }
+    }
+    assert!(all[..2].iter().all(|o| o.at == format!("{f}:10")));
+    assert!(all[2..].iter().all(|o| o.at == format!("{f}:13")));
+
+    // The contact scene: the floor's pieces keep the floor's triangles.
+    let mut b = crate::scene::SceneBuilder::new("contact");
+    let white = b
+        .add_material(Material::diffuse("white", [0.5; 3]))
+        .unwrap();
+    let c = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    let floor = [c(0., 0., 0.), c(4., 0., 0.), c(4., 4., 0.), c(0., 4., 0.)];
+    b.add_mesh_f64("floor", &floor, &[[0, 1, 2], [0, 2, 3]], white)
+        .unwrap();
+    let walls = [
+        c(1., 1., 0.),
+        c(2., 1., 0.),
+        c(2., 2., 0.),
+        c(1., 2., 0.),
+        c(1., 1., 1.),
+        c(2., 1., 1.),
+        c(2., 2., 1.),
+        c(1., 2., 1.),
+    ];
+    let faces = [
+        [0, 1, 5],
+        [0, 5, 4],
+        [1, 2, 6],
+        [1, 6, 5],
+        [2, 3, 7],
+        [2, 7, 6],
+        [3, 0, 4],
+        [3, 4, 7],
+        [4, 5, 6],
+        [4, 6, 7],
+    ];
+    b.add_mesh_f64("box", &walls, &faces, white).unwrap();
+    let s = b.build().unwrap();
+    assert!(s.imprinted.triangles > 0);
+    let inside = |o: &TriangleOrigin, x: DVec3| {
+        let [a, b, c] = o.corners;
+        let n = (b - a).cross(c - a);
+        [(a, b), (b, c), (c, a)]
+            .iter()
+            .all(|&(p, q)| (q - p).cross(x - p).dot(n) >= -1e-12 * n.length_squared())
+            && (x - a).dot(n).abs() <= 1e-12 * n.length()
+    };
+    for (patch, origins) in s.surface.patches.iter().zip(&s.origins) {
+        for (tri, o) in patch.triangles.iter().zip(origins) {
+            let want = if patch.name.starts_with("floor") {
+                0..2
+            } else {
+                2..12
+            };
+            assert!(want.contains(&o.input), "{o:?}");
+            assert_eq!(
+                o.at,
+                format!(
+                    "mesh '{}' face {}",
+                    &patch.name[..patch.name.find('/').unwrap()],
+                    o.input - want.start
+                )
+            );
+            assert!(tri.iter().all(|&x| inside(o, x)), "{tri:?} outside {o:?}");
+        }
+    }
+    let mesh = crate::mesh::Mesh::new(s.surface.clone(), 2);
+    let origins = s.element_origins(&mesh);
+    assert_eq!(origins.len(), mesh.len());
+    for (k, o) in origins.iter().enumerate() {
+        let o = o.expect("every element has an input triangle");
+        let centroid = mesh.vertices(k).iter().sum::<DVec3>() / 3.0;
+        assert!(inside(o, centroid), "element {k} outside {o:?}");
+    }
+}

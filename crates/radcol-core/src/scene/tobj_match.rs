@@ -4,7 +4,7 @@
 
 use super::obj::ScanFace;
 use super::validate::{Capped, RawTriangle};
-use super::{Material, SceneError};
+use super::{Material, SceneError, TriangleOrigin};
 use glam::DVec3;
 use std::collections::HashMap;
 
@@ -92,6 +92,12 @@ pub(super) fn match_tobj(
                     vertices: [points[a], points[b], points[c]],
                     at: at.clone(),
                     uv: face.uvs.as_ref().map(|u| [u[a], u[b], u[c]]),
+                    origin: TriangleOrigin {
+                        input: out.len(),
+                        vertices: [a, b, c].map(|k| face.vertices[k] as u32),
+                        corners: [points[a], points[b], points[c]],
+                        at: at.clone(),
+                    },
                 });
             }
         }

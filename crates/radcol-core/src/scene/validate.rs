@@ -1,7 +1,7 @@
 //! Shared checks and repairs of every scene input: triangles with their origin
 //! (file:line or group/face) become a [`Scene`], or a [`SceneError`].
 
-use super::{Material, Scene, SceneError, MAX_WARNINGS_PER_KIND};
+use super::{Material, Scene, SceneError, TriangleOrigin, MAX_WARNINGS_PER_KIND};
 use crate::camera::Camera;
 use crate::geometry::{Identity, Patch, Surface};
 use crate::visibility::is_convex_enclosure;
@@ -24,6 +24,8 @@ pub(crate) struct RawTriangle {
     /// Texture coordinates of the vertices (OBJ `vt`, glTF TEXCOORD_n), v
     /// down from the image's top edge as in glTF.
     pub uv: Option<[[f64; 2]; 3]>,
+    /// The input triangle it is, or a piece of.
+    pub origin: TriangleOrigin,
 }
 
 /// Everything a loader gathered, before the shared checks.
@@ -160,8 +162,12 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
     super::facing::facing_nothing(&tris, &kept, &materials, scale, &mut warnings);
     let (kept, imprinted) = super::imprint::contact_lines(kept, scale);
 
-    let (patches, patch_material) = patches_by_group(&kept, &materials);
-    let uvs = texture_coordinates(&kept, &patches, &mut warnings);
+    let (patches, patch_material, patch_of) = patches_by_group(&kept, &materials);
+    let uvs = texture_coordinates(&kept, &patch_of, patches.len(), &mut warnings);
+    let mut origins = vec![Vec::new(); patches.len()];
+    for (t, &j) in kept.iter().zip(&patch_of) {
+        origins[j].push(t.origin.clone());
+    }
     let surface = Surface {
         name: name.clone(),
         patches,
@@ -178,6 +184,7 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
         imprinted,
         metres_per_unit: None,
         uvs,
+        origins,
     })
 }
 
@@ -185,7 +192,8 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
 /// order, when every triangle has them; a warning when only some do.
 fn texture_coordinates(
     kept: &[RawTriangle],
-    patches: &[Patch],
+    patch_of: &[usize],
+    patches: usize,
     warnings: &mut Vec<String>,
 ) -> Option<Vec<Vec<[[f64; 2]; 3]>>> {
     let with = kept.iter().filter(|t| t.uv.is_some()).count();
@@ -205,23 +213,10 @@ fn texture_coordinates(
         }
         return None;
     }
-    // Patches numbered by first appearance of (group, material), each
-    // with its triangles in input order, as patches_by_group does.
-    let mut patch_of: HashMap<(&str, usize), usize> = HashMap::new();
-    let mut uvs: Vec<Vec<[[f64; 2]; 3]>> = Vec::new();
-    for t in kept {
-        let j = *patch_of
-            .entry((t.group.as_str(), t.material))
-            .or_insert_with(|| {
-                uvs.push(Vec::new());
-                uvs.len() - 1
-            });
+    let mut uvs: Vec<Vec<[[f64; 2]; 3]>> = vec![Vec::new(); patches];
+    for (t, &j) in kept.iter().zip(patch_of) {
         uvs[j].push(t.uv.expect("all have them"));
     }
-    debug_assert!(uvs
-        .iter()
-        .zip(patches)
-        .all(|(u, p)| u.len() == p.triangles.len()));
     Some(uvs)
 }
 
@@ -291,11 +286,16 @@ fn drop_degenerate_and_duplicates(
 }
 
 /// One patch per (group, material), in order of first appearance, with
-/// each patch's material.
-fn patches_by_group(kept: &[RawTriangle], materials: &[Material]) -> (Vec<Patch>, Vec<usize>) {
+/// each patch's material, and the patch of each triangle (whose triangles
+/// keep their order).
+fn patches_by_group(
+    kept: &[RawTriangle],
+    materials: &[Material],
+) -> (Vec<Patch>, Vec<usize>, Vec<usize>) {
     let mut patch_of: HashMap<(String, usize), usize> = HashMap::new();
     let mut patches: Vec<Patch> = Vec::new();
     let mut patch_material = Vec::new();
+    let mut of = Vec::with_capacity(kept.len());
     for t in kept {
         let j = *patch_of
             .entry((t.group.clone(), t.material))
@@ -309,8 +309,9 @@ fn patches_by_group(kept: &[RawTriangle], materials: &[Material]) -> (Vec<Patch>
                 patches.len() - 1
             });
         patches[j].triangles.push(t.vertices);
+        of.push(j);
     }
-    (patches, patch_material)
+    (patches, patch_material, of)
 }
 
 /// Warns about edges shared by more than two triangles (hashing sorted
