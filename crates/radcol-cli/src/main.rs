@@ -17,6 +17,7 @@
 //! ```
 
 mod args;
+mod backend;
 mod error;
 mod export;
 mod lightmap;

@@ -2,6 +2,7 @@
 //! reference operator when E is manufactured), the solve configuration and
 //! the backend, each built when a command needs it.
 
+use crate::backend::select_backend;
 use crate::error::bad_input;
 use crate::scene::{Loaded, SceneSpec};
 use crate::validate::{AlphaSpec, LookSpec, OutputFile, ProblemSpec};
@@ -12,7 +13,6 @@ use radcol_core::camera::Camera;
 use radcol_core::problem::{Field, Problem, ReferenceOperator};
 use radcol_core::render::{RenderOptions, ToneMap};
 use radcol_core::run::SolveConfig;
-use radcol_gpu::select_backend;
 
 /// Refinement level of the reference mesh that manufactures E = u - K u.
 const REFERENCE_LEVEL: u32 = 2;
@@ -325,8 +325,8 @@ pub fn check_writable(file: &OutputFile) -> Result<(), crate::error::BadInput> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::backend::{BackendChoice, Precision};
     use radcol_core::assembly::Scalar;
-    use radcol_gpu::{BackendChoice, Precision};
 
     #[test]
     fn auto_alpha_is_alpha0_for_odd_degree() {

@@ -13,6 +13,7 @@ use crate::args::{
     BackendArg, Cli, Command, InfoArgs, NodesArgs, OperatorArg, PrecisionArg, ProblemArgs,
     SolveArgs, SolverArg, StudyArgs, VisibilityArg,
 };
+use crate::backend::{BackendChoice, Precision};
 use crate::error::{bad_input, BadInput};
 use crate::scene::SceneSpec;
 use anyhow::{Context, Result};
@@ -25,7 +26,6 @@ use radcol_core::problem::Field;
 use radcol_core::run::adapt::AdaptOptions;
 use radcol_core::run::{OperatorChoice, SolveConfig, SolverKind};
 use radcol_core::solve::GmresParams;
-use radcol_gpu::{BackendChoice, Precision};
 use std::ops::RangeInclusive;
 
 /// A validated command. There is one per run, so its variants' sizes do
