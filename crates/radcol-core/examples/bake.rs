@@ -112,10 +112,19 @@ fn main() -> Result<(), Error> {
     }
     if let Some(out) = args.get(3) {
         let shown: Vec<&Solution> = outcome.channels.iter().map(|c| c.shown()).collect();
-        let atlas = Atlas::new(&scene.surface, 1024)?;
+        // The scene's own texture coordinates (OBJ vt, glTF TEXCOORD_1 or
+        // _0) when it has them, else radcol's planar charts.
+        let atlas = match &scene.uvs {
+            Some(uvs) => Atlas::from_uvs(&scene.surface, uvs, 1024)?,
+            None => Atlas::new(&scene.surface, 1024)?,
+        };
         let lightmap = bake_lightmap(outcome.discretization.mesh(), &shown, &atlas)?;
         write_ppm(out, &lightmap);
-        println!("wrote {out}: {} charts", atlas.charts.len());
+        if atlas.is_input() {
+            println!("wrote {out}: in the scene's texture coordinates");
+        } else {
+            println!("wrote {out}: {} charts", atlas.charts.len());
+        }
     }
     if let Some(out) = args.get(2) {
         let shown: Vec<&Solution> = outcome.channels.iter().map(|c| c.shown()).collect();
