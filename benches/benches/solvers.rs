@@ -7,6 +7,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use radcol_core::assembly::{AssemblyBackend, AssemblyPlan, CpuBackend, QuadratureOptions};
 use radcol_core::discretization::Discretization;
 use radcol_core::geometry::shapes::box_room;
+use radcol_core::matrix::DenseMatrix;
 use radcol_core::mesh::Mesh;
 use radcol_core::nodes::NodeSet;
 use radcol_core::solve::{
@@ -15,15 +16,20 @@ use radcol_core::solve::{
 use std::ops::ControlFlow;
 use std::sync::Arc;
 
+/// The geometric matrix of the unit box room at degree `r`, `level`.
+fn box_matrix(r: usize, level: u32) -> DenseMatrix {
+    let mesh = Arc::new(Mesh::new(Arc::new(box_room(1.0, 1.0, 1.0)), level));
+    let disc = Arc::new(Discretization::new(mesh, NodeSet::new(r, 0.1).unwrap()));
+    let visibility = radcol_core::visibility::analyze(disc.mesh().surface());
+    let plan = AssemblyPlan::new(disc, QuadratureOptions::default(), &visibility);
+    CpuBackend.assemble(&plan).unwrap().matrix
+}
+
 fn solvers(c: &mut Criterion) {
     let mut group = c.benchmark_group("solve");
     group.sample_size(10);
     for (r, level) in [(1, 2), (2, 2), (1, 3), (2, 3)] {
-        let mesh = Arc::new(Mesh::new(Arc::new(box_room(1.0, 1.0, 1.0)), level));
-        let disc = Arc::new(Discretization::new(mesh, NodeSet::new(r, 0.1).unwrap()));
-        let visibility = radcol_core::visibility::analyze(disc.mesh().surface());
-        let plan = AssemblyPlan::new(disc, QuadratureOptions::default(), &visibility);
-        let gm = CpuBackend.assemble(&plan).unwrap().matrix;
+        let gm = box_matrix(r, level);
         let n = gm.nrows();
         let rho = vec![0.7; n];
         let b: Vec<f64> = (0..n).map(|i| 1.0 + (i % 7) as f64 * 0.1).collect();
@@ -53,11 +59,7 @@ fn channels(c: &mut Criterion) {
     let mut group = c.benchmark_group("channels");
     group.sample_size(10);
     for (r, level) in [(1, 3), (2, 3), (1, 4)] {
-        let mesh = Arc::new(Mesh::new(Arc::new(box_room(1.0, 1.0, 1.0)), level));
-        let disc = Arc::new(Discretization::new(mesh, NodeSet::new(r, 0.1).unwrap()));
-        let visibility = radcol_core::visibility::analyze(disc.mesh().surface());
-        let plan = AssemblyPlan::new(disc, QuadratureOptions::default(), &visibility);
-        let gm = CpuBackend.assemble(&plan).unwrap().matrix;
+        let gm = box_matrix(r, level);
         let n = gm.nrows();
         let rhos: Vec<Vec<f64>> = [0.63, 0.45, 0.4]
             .iter()

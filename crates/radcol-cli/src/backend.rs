@@ -3,74 +3,61 @@
 //! the command links no wgpu: `--backend auto` assembles on the CPU and
 //! `--backend gpu` is refused with one line.
 
+use crate::args::{BackendArg, PrecisionArg};
+use clap::ValueEnum;
+use radcol_core::assembly::AssemblyBackend;
+
+/// The flag's value as written ("cpu", "gpu", "auto").
+pub fn name(b: BackendArg) -> String {
+    b.to_possible_value()
+        .map_or_else(String::new, |v| v.get_name().to_string())
+}
+
+/// The backend `backend` asks for in `precision`, or why this build or
+/// machine cannot give it.
 #[cfg(feature = "gpu")]
-pub use radcol_gpu::{select_backend, BackendChoice, Precision};
+pub fn select_backend(
+    backend: BackendArg,
+    precision: PrecisionArg,
+) -> Result<Box<dyn AssemblyBackend>, String> {
+    use radcol_gpu::{BackendChoice, Precision};
+    let choice = match backend {
+        BackendArg::Cpu => BackendChoice::Cpu,
+        BackendArg::Gpu => BackendChoice::Gpu,
+        BackendArg::Auto => BackendChoice::Auto,
+    };
+    let precision = match precision {
+        PrecisionArg::Auto => Precision::Auto,
+        PrecisionArg::F64 => Precision::F64,
+        PrecisionArg::F32 => Precision::F32,
+    };
+    radcol_gpu::select_backend(choice, precision).map_err(|e| e.to_string())
+}
 
+/// The backend `backend` asks for in `precision`: the CPU (f64), or why
+/// this build cannot give it.
 #[cfg(not(feature = "gpu"))]
-pub use cpu_only::{select_backend, BackendChoice, Precision};
-
-#[cfg(not(feature = "gpu"))]
-mod cpu_only {
-    use radcol_core::assembly::{AssemblyBackend, BackendKind, CpuBackend, Scalar};
-    use radcol_core::error::InputError;
-    use std::fmt;
-
-    /// Which backend to assemble on (as `radcol_gpu::BackendChoice`).
-    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-    pub enum BackendChoice {
-        /// The CPU backend.
-        Cpu,
-        /// A GPU: not in this build.
-        Gpu,
-        /// The CPU backend (no GPU in this build).
-        #[default]
-        Auto,
+pub fn select_backend(
+    backend: BackendArg,
+    precision: PrecisionArg,
+) -> Result<Box<dyn AssemblyBackend>, String> {
+    use radcol_core::assembly::{BackendKind, CpuBackend, Scalar};
+    if backend == BackendArg::Gpu {
+        return Err(
+            "this radcol was built without the `gpu` cargo feature (no wgpu); \
+                    build it with default features for GPU assembly"
+                .into(),
+        );
     }
-
-    impl fmt::Display for BackendChoice {
-        fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-            f.write_str(match self {
-                BackendChoice::Cpu => "cpu",
-                BackendChoice::Gpu => "gpu",
-                BackendChoice::Auto => "auto",
-            })
+    if precision == PrecisionArg::F32 {
+        return Err(radcol_core::error::InputError::Precision {
+            backend: BackendKind::Cpu,
+            supported: Scalar::F64,
+            asked: Scalar::F32,
         }
+        .to_string());
     }
-
-    /// The device precision asked for (as `radcol_gpu::Precision`).
-    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-    pub enum Precision {
-        /// f64 on the CPU.
-        #[default]
-        Auto,
-        /// f64.
-        F64,
-        /// f32: a GPU precision, refused.
-        F32,
-    }
-
-    /// The CPU backend, or why the choice cannot be had in this build.
-    pub fn select_backend(
-        choice: BackendChoice,
-        precision: Precision,
-    ) -> Result<Box<dyn AssemblyBackend>, String> {
-        if choice == BackendChoice::Gpu {
-            return Err(
-                "this radcol was built without the `gpu` cargo feature (no wgpu); \
-                 build it with default features for GPU assembly"
-                    .into(),
-            );
-        }
-        if precision == Precision::F32 {
-            return Err(InputError::Precision {
-                backend: BackendKind::Cpu,
-                supported: Scalar::F64,
-                asked: Scalar::F32,
-            }
-            .to_string());
-        }
-        Ok(Box::new(CpuBackend))
-    }
+    Ok(Box::new(CpuBackend))
 }
 
 #[cfg(all(test, not(feature = "gpu")))]
@@ -82,14 +69,14 @@ mod tests {
     /// f32 are refused, saying why.
     #[test]
     fn backend_without_the_gpu_feature() {
-        for choice in [BackendChoice::Auto, BackendChoice::Cpu] {
-            let b = select_backend(choice, Precision::Auto).unwrap();
+        for choice in [BackendArg::Auto, BackendArg::Cpu] {
+            let b = select_backend(choice, PrecisionArg::Auto).unwrap();
             assert_eq!(b.info().kind, BackendKind::Cpu);
         }
-        let e = select_backend(BackendChoice::Gpu, Precision::Auto)
+        let e = select_backend(BackendArg::Gpu, PrecisionArg::Auto)
             .err()
             .unwrap();
         assert!(e.contains("without the `gpu` cargo feature"), "{e}");
-        assert!(select_backend(BackendChoice::Cpu, Precision::F32).is_err());
+        assert!(select_backend(BackendArg::Cpu, PrecisionArg::F32).is_err());
     }
 }

@@ -146,7 +146,7 @@ pub fn setup(
     let backend = select_backend(p.backend, p.precision).map_err(|e| {
         bad_input(format!(
             "--backend {}: {e} (--backend cpu needs no device)",
-            p.backend
+            crate::backend::name(p.backend)
         ))
     })?;
     let (rho_text, emission_text) = match (&loaded, &p.emission, &p.exact) {
@@ -325,7 +325,7 @@ pub fn check_writable(file: &OutputFile) -> Result<(), crate::error::BadInput> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::backend::{BackendChoice, Precision};
+    use crate::args::{BackendArg, PrecisionArg};
     use radcol_core::assembly::Scalar;
 
     #[test]
@@ -336,8 +336,8 @@ mod tests {
 
     #[test]
     fn cpu_backend_is_f64_only() {
-        let cpu = select_backend(BackendChoice::Cpu, Precision::Auto).unwrap();
+        let cpu = select_backend(BackendArg::Cpu, PrecisionArg::Auto).unwrap();
         assert_eq!(cpu.info().precision, Scalar::F64);
-        assert!(select_backend(BackendChoice::Cpu, Precision::F32).is_err());
+        assert!(select_backend(BackendArg::Cpu, PrecisionArg::F32).is_err());
     }
 }

@@ -13,7 +13,6 @@ use crate::args::{
     BackendArg, Cli, Command, InfoArgs, NodesArgs, OperatorArg, PrecisionArg, ProblemArgs,
     SolveArgs, SolverArg, StudyArgs, VisibilityArg,
 };
-use crate::backend::{BackendChoice, Precision};
 use crate::error::{bad_input, BadInput};
 use crate::scene::SceneSpec;
 use anyhow::{Context, Result};
@@ -78,9 +77,9 @@ pub struct ProblemSpec {
     /// Quadrature accuracy and visibility mode.
     pub quad: QuadratureOptions,
     /// Which backend.
-    pub backend: BackendChoice,
+    pub backend: BackendArg,
     /// Device precision.
-    pub precision: Precision,
+    pub precision: PrecisionArg,
     /// Estimate the error after the solve.
     pub estimate: bool,
     /// Limit negative u_n for display.
@@ -360,17 +359,8 @@ fn problem(p: &ProblemArgs) -> Result<ProblemSpec> {
     let field = |flag: &'static str, text: &str| -> Result<(String, Field)> {
         Ok((text.to_string(), Field::parse(text).context(flag)?))
     };
-    let backend = match p.backend {
-        BackendArg::Cpu => BackendChoice::Cpu,
-        BackendArg::Gpu => BackendChoice::Gpu,
-        BackendArg::Auto => BackendChoice::Auto,
-    };
-    let precision = match p.precision {
-        PrecisionArg::Auto => Precision::Auto,
-        PrecisionArg::F64 => Precision::F64,
-        PrecisionArg::F32 => Precision::F32,
-    };
-    if backend == BackendChoice::Cpu && precision == Precision::F32 {
+    let (backend, precision) = (p.backend, p.precision);
+    if backend == BackendArg::Cpu && precision == PrecisionArg::F32 {
         return Err(bad_input(
             "the CPU backend computes in f64 only; --precision f32 needs --backend gpu",
         )

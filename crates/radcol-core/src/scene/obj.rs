@@ -374,16 +374,14 @@ fn parse_face<'a>(
         let index: i64 = first
             .parse()
             .map_err(|_| syntax(at.to_string(), format!("cannot parse face index '{w}'")))?;
-        let n = positions.len() as i64;
-        let resolved = if index < 0 { n + index } else { index - 1 };
-        if index == 0 || resolved < 0 || resolved >= n {
+        let Some(resolved) = resolve(index, positions.len()) else {
             return Err(SceneError::IndexOutOfRange {
                 at: at.to_string(),
                 index,
                 count: positions.len(),
             });
-        }
-        vertices.push(resolved as usize);
+        };
+        vertices.push(resolved);
         match w.split('/').nth(1).filter(|t| !t.is_empty()) {
             Some(t) => {
                 let uv = texcoord(t, texcoords, at)?;
@@ -409,17 +407,24 @@ fn texcoord(t: &str, texcoords: &[[f64; 2]], at: &str) -> Result<[f64; 2], Scene
     let index: i64 = t
         .parse()
         .map_err(|_| syntax(at.to_string(), format!("cannot parse texture index '{t}'")))?;
-    let n = texcoords.len() as i64;
-    let resolved = if index < 0 { n + index } else { index - 1 };
-    if index == 0 || resolved < 0 || resolved >= n {
-        return Err(syntax(
+    match resolve(index, texcoords.len()) {
+        Some(i) => Ok(texcoords[i]),
+        None => Err(syntax(
             at.to_string(),
             format!(
-                "texture coordinate index {index} is out of range ({n} vt statements before it)"
+                "texture coordinate index {index} is out of range ({} vt statements before it)",
+                texcoords.len()
             ),
-        ));
+        )),
     }
-    Ok(texcoords[resolved as usize])
+}
+
+/// The 0-based position of an OBJ index (1-based, or negative from the
+/// end) among `count` statements read so far, if it is one of them.
+fn resolve(index: i64, count: usize) -> Option<usize> {
+    let n = count as i64;
+    let resolved = if index < 0 { n + index } else { index - 1 };
+    (index != 0 && (0..n).contains(&resolved)).then_some(resolved as usize)
 }
 
 /// The warning for a polygon of more than three vertices that is not planar.

@@ -787,27 +787,16 @@ fn obj_texture_coordinates_follow_the_triangles() {
     );
 }
 
-/// A face split by an imprinted contact line gives its pieces the
-/// texture coordinates of their corners' positions on the face.
-#[test]
-fn imprinted_pieces_interpolate_texture_coordinates() {
-    use crate::scene::SceneBuilder;
-    let mut b = SceneBuilder::new("contact");
+/// A 4 × 4 floor and a 1 × 1 × 1 box standing on it at (1..2, 1..2) with
+/// an open bottom, whose walls imprint the floor; with `uvs`, the floor's
+/// texture coordinates are (x / 4, y / 4) and the walls' (x / 4, z).
+fn contact_scene(uvs: bool) -> Scene {
+    let mut b = crate::scene::SceneBuilder::new("contact");
     let white = b
         .add_material(Material::diffuse("white", [0.5; 3]))
         .unwrap();
-    // A 4 × 4 floor with u = x / 4, v = y / 4, and a 1 × 1 × 1 box standing
-    // on it at (1..2, 1..2), whose bottom is open: its walls imprint the floor.
-    let floor = [
-        DVec3::new(0., 0., 0.),
-        DVec3::new(4., 0., 0.),
-        DVec3::new(4., 4., 0.),
-        DVec3::new(0., 4., 0.),
-    ];
-    let uv: Vec<[f64; 2]> = floor.iter().map(|p| [p.x / 4.0, p.y / 4.0]).collect();
-    b.add_mesh_with_uvs("floor", &floor, &uv, &[[0, 1, 2], [0, 2, 3]], white)
-        .unwrap();
     let c = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    let floor = [c(0., 0., 0.), c(4., 0., 0.), c(4., 4., 0.), c(0., 4., 0.)];
     let walls = [
         c(1., 1., 0.),
         c(2., 1., 0.),
@@ -818,7 +807,6 @@ fn imprinted_pieces_interpolate_texture_coordinates() {
         c(2., 2., 1.),
         c(1., 2., 1.),
     ];
-    let wall_uv: Vec<[f64; 2]> = walls.iter().map(|p| [p.x / 4.0, p.z]).collect();
     let faces = [
         [0, 1, 5],
         [0, 5, 4],
@@ -831,9 +819,37 @@ fn imprinted_pieces_interpolate_texture_coordinates() {
         [4, 5, 6],
         [4, 6, 7],
     ];
-    b.add_mesh_with_uvs("box", &walls, &wall_uv, &faces, white)
+    let floor_tris = [[0, 1, 2], [0, 2, 3]];
+    if uvs {
+        let uv = |p: &[DVec3], f: fn(&DVec3) -> [f64; 2]| p.iter().map(f).collect::<Vec<_>>();
+        b.add_mesh_with_uvs(
+            "floor",
+            &floor,
+            &uv(&floor, |p| [p.x / 4.0, p.y / 4.0]),
+            &floor_tris,
+            white,
+        )
         .unwrap();
-    let s = b.build().unwrap();
+        b.add_mesh_with_uvs(
+            "box",
+            &walls,
+            &uv(&walls, |p| [p.x / 4.0, p.z]),
+            &faces,
+            white,
+        )
+        .unwrap();
+    } else {
+        b.add_mesh_f64("floor", &floor, &floor_tris, white).unwrap();
+        b.add_mesh_f64("box", &walls, &faces, white).unwrap();
+    }
+    b.build().unwrap()
+}
+
+/// A face split by an imprinted contact line gives its pieces the
+/// texture coordinates of their corners' positions on the face.
+#[test]
+fn imprinted_pieces_interpolate_texture_coordinates() {
+    let s = contact_scene(true);
     assert!(s.imprinted.triangles > 0, "{:?}", s.imprinted);
     let uvs = s.uvs.as_ref().unwrap();
     let floor_patch = &s.surface.patches[0];
@@ -878,38 +894,7 @@ fn surface_triangles_and_elements_know_their_input_triangle() {
     assert!(all[2..].iter().all(|o| o.at == format!("{f}:13")));
 
     // The contact scene: the floor's pieces keep the floor's triangles.
-    let mut b = crate::scene::SceneBuilder::new("contact");
-    let white = b
-        .add_material(Material::diffuse("white", [0.5; 3]))
-        .unwrap();
-    let c = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
-    let floor = [c(0., 0., 0.), c(4., 0., 0.), c(4., 4., 0.), c(0., 4., 0.)];
-    b.add_mesh_f64("floor", &floor, &[[0, 1, 2], [0, 2, 3]], white)
-        .unwrap();
-    let walls = [
-        c(1., 1., 0.),
-        c(2., 1., 0.),
-        c(2., 2., 0.),
-        c(1., 2., 0.),
-        c(1., 1., 1.),
-        c(2., 1., 1.),
-        c(2., 2., 1.),
-        c(1., 2., 1.),
-    ];
-    let faces = [
-        [0, 1, 5],
-        [0, 5, 4],
-        [1, 2, 6],
-        [1, 6, 5],
-        [2, 3, 7],
-        [2, 7, 6],
-        [3, 0, 4],
-        [3, 4, 7],
-        [4, 5, 6],
-        [4, 6, 7],
-    ];
-    b.add_mesh_f64("box", &walls, &faces, white).unwrap();
-    let s = b.build().unwrap();
+    let s = contact_scene(false);
     assert!(s.imprinted.triangles > 0);
     let inside = |o: &TriangleOrigin, x: DVec3| {
         let [a, b, c] = o.corners;
