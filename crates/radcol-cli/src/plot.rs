@@ -1,22 +1,20 @@
-//! Hand-written SVG log-log plots: a study (error vs h and vs total time,
-//! three series: nodes max, global max, L²) and a comparison of degrees and
+//! Log-log plots drawn with plotters' SVG backend: a study (error vs h and
+//! vs total time, three series: nodes max, global max, L²; dashed reference
+//! slopes O(h^p) of the theory's orders) and a comparison of degrees and
 //! refinements (error vs unknowns and vs wall time, one line per degree and
-//! refinement); two panels sharing the error axis, decade ticks, a legend.
+//! refinement, adaptive ones dashed); two panels sharing the error axis,
+//! whole decades, a legend in each.
 
+use plotters::prelude::*;
 use radcol_core::study::speed::{Refinement, Setting};
 use radcol_core::study::StudyRow;
-use std::fmt::Write as _;
 
-const WIDTH: f64 = 960.0;
-const HEIGHT: f64 = 520.0;
-const PANEL_W: f64 = 360.0;
-const PANEL_H: f64 = 330.0;
-const PANEL_TOP: f64 = 70.0;
-const PANEL_LEFT: [f64; 2] = [90.0, 570.0];
+const WIDTH: u32 = 960;
+const HEIGHT: u32 = 520;
 
 struct Series {
     name: &'static str,
-    color: &'static str,
+    color: RGBColor,
     marker: Marker,
     value: fn(&StudyRow) -> f64,
 }
@@ -33,19 +31,19 @@ enum Marker {
 const SERIES: [Series; 3] = [
     Series {
         name: "nodes max",
-        color: "#1f77b4",
+        color: RGBColor(0x1f, 0x77, 0xb4),
         marker: Marker::Circle,
         value: |r| r.nodes_max,
     },
     Series {
         name: "global max",
-        color: "#d62728",
+        color: RGBColor(0xd6, 0x27, 0x28),
         marker: Marker::Square,
         value: |r| r.global_max,
     },
     Series {
         name: "L2",
-        color: "#2ca02c",
+        color: RGBColor(0x2c, 0xa0, 0x2c),
         marker: Marker::Triangle,
         value: |r| r.l2,
     },
@@ -77,132 +75,16 @@ impl LogAxis {
         Self { lo, hi }
     }
 
-    /// Position of `v` in [0, 1] along the axis.
-    fn frac(&self, v: f64) -> f64 {
-        (v.log10() - self.lo as f64) / (self.hi - self.lo) as f64
-    }
-
-    /// Label every `step`-th decade so that at most about 8 labels show.
-    fn label_step(&self) -> i32 {
-        ((self.hi - self.lo) + 7) / 8
-    }
-}
-
-fn escape(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
-
-/// `10^k` as SVG text with a superscript exponent.
-fn decade_label(k: i32) -> String {
-    format!("10<tspan dy=\"-7\" font-size=\"10\">{k}</tspan>")
-}
-
-fn marker(svg: &mut String, m: Marker, x: f64, y: f64, color: &str) {
-    let _ = match m {
-        Marker::Circle => writeln!(
-            svg,
-            r#"<circle cx="{x:.2}" cy="{y:.2}" r="4" fill="{color}"/>"#
-        ),
-        Marker::Square => writeln!(
-            svg,
-            r#"<rect x="{:.2}" y="{:.2}" width="8" height="8" fill="{color}"/>"#,
-            x - 4.0,
-            y - 4.0
-        ),
-        Marker::Triangle => writeln!(
-            svg,
-            r#"<polygon points="{:.2},{:.2} {:.2},{:.2} {:.2},{:.2}" fill="{color}"/>"#,
-            x,
-            y - 5.0,
-            x - 5.0,
-            y + 4.0,
-            x + 5.0,
-            y + 4.0
-        ),
-        Marker::None => Ok(()),
-    };
-}
-
-/// Decade grid lines, ticks and labels of `axis` (the x axis when
-/// `horizontal`) on the panel at `left`; minor ticks at 2..9 × 10^k.
-fn ticks(svg: &mut String, axis: LogAxis, horizontal: bool, left: f64) {
-    let top = PANEL_TOP;
-    let bottom = top + PANEL_H;
-    let step = axis.label_step();
-    for k in axis.lo..=axis.hi {
-        let f = (k - axis.lo) as f64 / (axis.hi - axis.lo) as f64;
-        let labelled = (k - axis.lo) % step == 0;
-        if horizontal {
-            let xp = left + f * PANEL_W;
-            let _ = writeln!(
-                svg,
-                r##"<line x1="{xp:.2}" y1="{top}" x2="{xp:.2}" y2="{bottom}" stroke="#e4e4e4"/>"##
-            );
-            let _ = writeln!(
-                svg,
-                r##"<line x1="{xp:.2}" y1="{bottom}" x2="{xp:.2}" y2="{:.2}" stroke="#333333"/>"##,
-                bottom + 6.0
-            );
-            if labelled {
-                let _ = writeln!(
-                    svg,
-                    r#"<text x="{xp:.2}" y="{:.2}" text-anchor="middle">{}</text>"#,
-                    bottom + 22.0,
-                    decade_label(k)
-                );
-            }
-        } else {
-            let yp = bottom - f * PANEL_H;
-            let _ = writeln!(
-                svg,
-                r##"<line x1="{left}" y1="{yp:.2}" x2="{:.2}" y2="{yp:.2}" stroke="#e4e4e4"/>"##,
-                left + PANEL_W
-            );
-            let _ = writeln!(
-                svg,
-                r##"<line x1="{:.2}" y1="{yp:.2}" x2="{left}" y2="{yp:.2}" stroke="#333333"/>"##,
-                left - 6.0
-            );
-            if labelled {
-                let _ = writeln!(
-                    svg,
-                    r#"<text x="{:.2}" y="{:.2}" text-anchor="end">{}</text>"#,
-                    left - 9.0,
-                    yp + 4.0,
-                    decade_label(k)
-                );
-            }
-        }
-        if k < axis.hi {
-            for m in 2..=9 {
-                let g = f + (m as f64).log10() / (axis.hi - axis.lo) as f64;
-                if horizontal {
-                    let xp = left + g * PANEL_W;
-                    let _ = writeln!(
-                        svg,
-                        r##"<line x1="{xp:.2}" y1="{bottom}" x2="{xp:.2}" y2="{:.2}" stroke="#333333"/>"##,
-                        bottom + 3.0
-                    );
-                } else {
-                    let yp = bottom - g * PANEL_H;
-                    let _ = writeln!(
-                        svg,
-                        r##"<line x1="{:.2}" y1="{yp:.2}" x2="{left}" y2="{yp:.2}" stroke="#333333"/>"##,
-                        left - 3.0
-                    );
-                }
-            }
-        }
+    /// The axis's span, 10^lo .. 10^hi.
+    fn span(self) -> std::ops::Range<f64> {
+        10f64.powi(self.lo)..10f64.powi(self.hi)
     }
 }
 
 /// One plotted line: its points (x, y), a marker at each.
 struct Line {
     name: String,
-    color: &'static str,
+    color: RGBColor,
     marker: Marker,
     dashed: bool,
     points: Vec<(f64, f64)>,
@@ -219,113 +101,97 @@ impl Line {
     }
 }
 
-/// One panel at `left`: frame, ticks, labels, and `lines` on axes `x`, `y`.
-fn panel(svg: &mut String, left: f64, lines: &[Line], x_label: &str, y: LogAxis) {
-    let x = LogAxis::covering(lines.iter().flat_map(|l| l.drawable().map(|p| p.0)));
-    let top = PANEL_TOP;
-    let bottom = top + PANEL_H;
-    let px = |v: f64| left + x.frac(v) * PANEL_W;
-    let py = |v: f64| bottom - y.frac(v) * PANEL_H;
+type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
+type Drawn = Result<(), Box<dyn std::error::Error>>;
+/// A panel's lines, its x axis label and where its legend goes (a corner
+/// the lines leave empty).
+type Panel = (Vec<Line>, &'static str, SeriesLabelPosition);
 
-    let _ = writeln!(
-        svg,
-        r##"<rect x="{left}" y="{top}" width="{PANEL_W}" height="{PANEL_H}" fill="#ffffff" stroke="#333333"/>"##
-    );
-    // Decade grid lines, ticks and labels; minor ticks at 2..9 × 10^k.
-    for (axis, horizontal) in [(x, true), (y, false)] {
-        ticks(svg, axis, horizontal, left);
-    }
-    let _ = writeln!(
-        svg,
-        r#"<text x="{:.2}" y="{:.2}" text-anchor="middle" font-size="14">{}</text>"#,
-        left + PANEL_W / 2.0,
-        bottom + 46.0,
-        escape(x_label)
-    );
-    let _ = writeln!(
-        svg,
-        r#"<text x="{:.2}" y="{:.2}" text-anchor="middle" font-size="14" transform="rotate(-90 {:.2} {:.2})">error</text>"#,
-        left - 58.0,
-        top + PANEL_H / 2.0,
-        left - 58.0,
-        top + PANEL_H / 2.0
-    );
+/// One panel: `lines` against `x_label` on whole decades, the error axis
+/// `y`, and a legend of its lines.
+fn panel(area: &Area<'_>, (lines, x_label, legend_at): &Panel, y: LogAxis) -> Drawn {
+    let x = LogAxis::covering(lines.iter().flat_map(|l| l.drawable().map(|p| p.0)));
+    let mut chart = ChartBuilder::on(area)
+        .margin(16)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d(x.span().log_scale(), y.span().log_scale())?;
+    chart
+        .configure_mesh()
+        .x_desc(*x_label)
+        .y_desc("error")
+        .x_label_formatter(&|v| format!("{v:.0e}"))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .draw()?;
     for line in lines {
-        let pts: Vec<(f64, f64)> = line.drawable().map(|(a, b)| (px(a), py(b))).collect();
-        if pts.len() > 1 {
-            let path: Vec<String> = pts.iter().map(|(a, b)| format!("{a:.2},{b:.2}")).collect();
-            let dash = if line.dashed {
-                r#" stroke-dasharray="7 4""#
-            } else {
-                ""
-            };
-            let _ = writeln!(
-                svg,
-                r#"<polyline points="{}" fill="none" stroke="{}" stroke-width="1.8"{dash}/>"#,
-                path.join(" "),
-                line.color
-            );
+        let style = ShapeStyle::from(line.color).stroke_width(2);
+        let points: Vec<(f64, f64)> = line.drawable().collect();
+        if line.dashed {
+            chart
+                .draw_series(DashedLineSeries::new(points.clone(), 7, 4, style))?
+                .label(line.name.as_str())
+                .legend(move |(x, y)| {
+                    plotters::element::DashedPathElement::new([(x, y), (x + 24, y)], 7, 4, style)
+                });
+        } else {
+            chart
+                .draw_series(LineSeries::new(points.clone(), style))?
+                .label(line.name.as_str())
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 24, y)], style));
         }
-        for &(a, b) in &pts {
-            marker(svg, line.marker, a, b, line.color);
+        let filled = ShapeStyle::from(line.color).filled();
+        match line.marker {
+            Marker::Circle => {
+                chart.draw_series(points.iter().map(|&p| Circle::new(p, 3, filled)))?;
+            }
+            Marker::Square => {
+                chart.draw_series(
+                    points
+                        .iter()
+                        .map(|&p| EmptyElement::at(p) + Rectangle::new([(-3, -3), (3, 3)], filled)),
+                )?;
+            }
+            Marker::Triangle => {
+                chart.draw_series(points.iter().map(|&p| TriangleMarker::new(p, 4, filled)))?;
+            }
+            Marker::None => {}
         }
     }
+    chart
+        .configure_series_labels()
+        .position(legend_at.clone())
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()?;
+    Ok(())
 }
 
-/// The document: `title`, the two panels (sharing the error axis) and a
-/// legend of the left panel's lines, in rows of six under both panels.
-fn document(title: &str, left: (&[Line], &str), right: (&[Line], &str)) -> String {
+/// The document: `title` over the two panels, which share the error axis.
+fn document(title: &str, [left, right]: &[Panel; 2]) -> String {
     let y = LogAxis::covering(
         left.0
             .iter()
-            .chain(right.0)
+            .chain(&right.0)
             .flat_map(|l| l.drawable().map(|p| p.1)),
     );
     let mut svg = String::new();
-    let _ = writeln!(
-        svg,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{HEIGHT}" viewBox="0 0 {WIDTH} {HEIGHT}" font-family="sans-serif" font-size="12">"#
-    );
-    let _ = writeln!(
-        svg,
-        r##"<rect width="100%" height="100%" fill="#ffffff"/>"##
-    );
-    let _ = writeln!(
-        svg,
-        r#"<text x="{:.1}" y="32" text-anchor="middle" font-size="17">{}</text>"#,
-        WIDTH / 2.0,
-        escape(title)
-    );
-    panel(&mut svg, PANEL_LEFT[0], left.0, left.1, y);
-    panel(&mut svg, PANEL_LEFT[1], right.0, right.1, y);
-    const PER_ROW: usize = 6;
-    for (row, chunk) in left.0.chunks(PER_ROW).enumerate() {
-        let legend_y = HEIGHT - 28.0 - 20.0 * (left.0.len().div_ceil(PER_ROW) - 1 - row) as f64;
-        let mut lx = WIDTH / 2.0 - 75.0 * chunk.len() as f64 + 15.0;
-        for line in chunk {
-            let dash = if line.dashed {
-                r#" stroke-dasharray="7 4""#
-            } else {
-                ""
-            };
-            let _ = writeln!(
-                svg,
-                r#"<line x1="{lx:.1}" y1="{legend_y}" x2="{:.1}" y2="{legend_y}" stroke="{}" stroke-width="1.8"{dash}/>"#,
-                lx + 36.0,
-                line.color
-            );
-            marker(&mut svg, line.marker, lx + 18.0, legend_y, line.color);
-            let _ = writeln!(
-                svg,
-                r#"<text x="{:.1}" y="{:.1}">{}</text>"#,
-                lx + 44.0,
-                legend_y + 4.0,
-                escape(&line.name)
-            );
-            lx += 150.0;
-        }
+    let drawn = (|| -> Drawn {
+        let root = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let root = root.titled(title, ("sans-serif", 18))?;
+        let (l, r) = root.split_horizontally(WIDTH / 2);
+        panel(&l, left, y)?;
+        panel(&r, right, y)?;
+        root.present()?;
+        Ok(())
+    })();
+    // Drawing into a String fails only on a plotters bug: say so in the plot.
+    if let Err(e) = drawn {
+        return format!(
+            "<svg xmlns=\"http://www.w3.org/2000/svg\"><text x=\"10\" y=\"20\">plot failed: {}</text></svg>\n",
+            e.to_string().replace('<', "&lt;").replace('&', "&amp;")
+        );
     }
-    svg.push_str("</svg>\n");
     svg
 }
 
@@ -335,6 +201,12 @@ fn document(title: &str, left: (&[Line], &str), right: (&[Line], &str)) -> Strin
 /// rounding floor (errors at rounding would pin it to noise; with none above
 /// it, no line).
 pub fn study_svg(rows: &[StudyRow], title: &str, orders: &[(&str, usize)]) -> String {
+    document(title, &study_panels(rows, orders))
+}
+
+/// The study's panels: error against h (falling to the lower left, the
+/// legend in the lower right) with the reference slopes, and against time.
+fn study_panels(rows: &[StudyRow], orders: &[(&str, usize)]) -> [Panel; 2] {
     let lines = |x_of: fn(&StudyRow) -> f64| -> Vec<Line> {
         SERIES
             .iter()
@@ -367,16 +239,26 @@ pub fn study_svg(rows: &[StudyRow], title: &str, orders: &[(&str, usize)]) -> St
                 .collect(),
         });
     }
-    document(
-        title,
-        (&by_h, "mesh size h"),
-        (&lines(|r| r.total_s), "total time per level (s)"),
-    )
+    [
+        (by_h, "mesh size h", SeriesLabelPosition::LowerRight),
+        (
+            lines(|r| r.total_s),
+            "total time per level (s)",
+            SeriesLabelPosition::UpperRight,
+        ),
+    ]
 }
 
 /// Colours of the degrees, in order.
-const PALETTE: [&str; 8] = [
-    "#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf",
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(0x1f, 0x77, 0xb4),
+    RGBColor(0xd6, 0x27, 0x28),
+    RGBColor(0x2c, 0xa0, 0x2c),
+    RGBColor(0x94, 0x67, 0xbd),
+    RGBColor(0xff, 0x7f, 0x0e),
+    RGBColor(0x8c, 0x56, 0x4b),
+    RGBColor(0xe3, 0x77, 0xc2),
+    RGBColor(0x17, 0xbe, 0xcf),
 ];
 
 /// The SVG document comparing `settings` (as `study --degrees/--adaptive`
@@ -384,6 +266,12 @@ const PALETTE: [&str; 8] = [
 /// line with circles per degree's uniform study and a dashed one with
 /// squares per adaptive run, in the order first met.
 pub fn comparison_svg(settings: &[Setting], title: &str) -> String {
+    document(title, &comparison_panels(settings))
+}
+
+/// The comparison's panels: error against unknowns and against wall time,
+/// both falling to the right (the legend in the upper right).
+fn comparison_panels(settings: &[Setting]) -> [Panel; 2] {
     let mut keys: Vec<(usize, bool)> = Vec::new();
     for s in settings {
         let key = (
@@ -421,11 +309,18 @@ pub fn comparison_svg(settings: &[Setting], title: &str) -> String {
             })
             .collect()
     };
-    document(
-        title,
-        (&lines(|s| s.unknowns as f64), "unknowns"),
-        (&lines(|s| s.seconds), "wall time (s)"),
-    )
+    [
+        (
+            lines(|s| s.unknowns as f64),
+            "unknowns",
+            SeriesLabelPosition::UpperRight,
+        ),
+        (
+            lines(|s| s.seconds),
+            "wall time (s)",
+            SeriesLabelPosition::UpperRight,
+        ),
+    ]
 }
 
 #[cfg(test)]
@@ -464,8 +359,13 @@ mod tests {
         assert_eq!((a.lo, a.hi), (-5, 0));
         let b = LogAxis::covering([0.5, 0.5].into_iter());
         assert_eq!((b.lo, b.hi), (-1, 0));
-        radcol_core::assert_close!(a.frac(1e-5), 0.0, 1e-12);
-        radcol_core::assert_close!(a.frac(1.0), 1.0, 1e-12);
+        assert_eq!(a.span(), 1e-5..1.0);
+    }
+
+    /// The names of a legend's entries in the SVG (plotters writes each
+    /// text on its own line).
+    fn count(svg: &str, text: &str) -> usize {
+        svg.lines().filter(|l| l.trim() == text).count()
     }
 
     #[test]
@@ -473,28 +373,40 @@ mod tests {
         let rows = vec![row(0, 1.0, 1e-2), row(1, 0.5, 1e-3), row(2, 0.25, 1e-4)];
         let svg = study_svg(&rows, "sphere <r = 1>", &[]);
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
-        assert_eq!(svg.matches("<polyline").count(), 6);
-        assert!(svg.contains("nodes max") && svg.contains("global max") && svg.contains(">L2<"));
-        assert!(svg.contains("sphere &lt;r = 1&gt;"));
+        // Each series in both panels' legends, the axes named, the title
+        // escaped.
+        for name in ["nodes max", "global max", "L2", "error"] {
+            assert_eq!(count(&svg, name), 2, "{name}");
+        }
+        assert_eq!(count(&svg, "mesh size h"), 1);
+        assert_eq!(count(&svg, "total time per level (s)"), 1);
+        assert!(svg.contains("sphere &lt;r = 1&gt;"), "{svg}");
+        // A marker per point: circles (nodes max), squares, triangles.
+        assert_eq!(svg.matches("<circle").count(), 6);
     }
 
     /// A reference O(h^2) through the finest global max error: its first
-    /// point lies 2 decades above it when h is 10 times larger.
+    /// point lies 2 decades above it when h is 10 times larger; a series
+    /// the theory names that is not plotted gets none. Drawn dashed, in
+    /// the legend.
     #[test]
     fn reference_slopes_pass_through_the_finest_error() {
         let rows = vec![row(0, 1.0, 1e-2), row(1, 0.1, 1e-4)];
-        let svg = study_svg(&rows, "t", &[("global max", 2), ("no such series", 9)]);
-        assert_eq!(svg.matches("<polyline").count(), 7, "one reference line");
-        assert!(svg.contains("O(h^2)") && !svg.contains("O(h^9)"));
-        assert!(svg.contains(r#"stroke-dasharray="7 4""#));
-        // Its points coincide with the data's here (slope exactly 2): the
-        // reference polyline repeats the global max polyline's coordinates.
-        let polys: Vec<&str> = svg
-            .lines()
-            .filter(|l| l.starts_with("<polyline"))
-            .map(|l| l.split('"').nth(1).unwrap())
-            .collect();
-        assert_eq!(polys[1], polys[3], "global max and its O(h^2) reference");
+        let orders = [("global max", 2), ("no such series", 9)];
+        let [(by_h, _, _), (by_t, _, _)] = study_panels(&rows, &orders);
+        assert_eq!((by_h.len(), by_t.len()), (4, 3), "one reference line");
+        let reference = &by_h[3];
+        assert!(reference.dashed && reference.name == "O(h^2)");
+        // Through the finest error (3e-4 at h = 0.1), two decades up at
+        // h = 1: the data's own points here (slope exactly 2).
+        for (r, d) in reference.points.iter().zip(&by_h[1].points) {
+            assert_eq!(r.0, d.0);
+            radcol_core::assert_close!(r.1, d.1, 1e-15);
+        }
+        radcol_core::assert_close!(reference.points[0].1, 3e-2, 1e-15);
+        let svg = study_svg(&rows, "t", &orders);
+        assert_eq!(count(&svg, "O(h^2)"), 1);
+        assert!(!svg.contains("O(h^9)"));
     }
 
     #[test]
@@ -518,14 +430,21 @@ mod tests {
             setting(2, u(1), 192, 1e-3),
             setting(2, u(2), 768, 1e-4),
         ];
-        let svg = comparison_svg(&settings, "cornell");
-        // Three lines in each of the two panels, one of them dashed.
-        assert_eq!(svg.matches("<polyline").count(), 6);
-        assert_eq!(svg.matches("stroke-dasharray").count(), 2 + 1);
-        for name in ["r = 1 uniform", "r = 1 adaptive", "r = 2 uniform"] {
-            assert_eq!(svg.matches(name).count(), 1, "{name}");
+        // Three lines in each of the two panels, the adaptive one dashed,
+        // degree 2 in its own colour.
+        for (lines, _, _) in comparison_panels(&settings) {
+            let names: Vec<&str> = lines.iter().map(|l| l.name.as_str()).collect();
+            assert_eq!(names, ["r = 1 uniform", "r = 1 adaptive", "r = 2 uniform"]);
+            let dashed: Vec<bool> = lines.iter().map(|l| l.dashed).collect();
+            assert_eq!(dashed, [false, true, false]);
+            assert!(lines[0].color == PALETTE[0] && lines[2].color == PALETTE[1]);
         }
-        // Degree 2 has its own colour.
-        assert!(svg.contains(PALETTE[1]) && !svg.contains(PALETTE[2]));
+        let [(by_n, _, _), (by_t, _, _)] = comparison_panels(&settings);
+        assert_eq!(by_n[1].points, [(96.0, 1e-2), (200.0, 1e-3)]);
+        assert_eq!(by_t[1].points, [(0.096, 1e-2), (0.2, 1e-3)]);
+        let svg = comparison_svg(&settings, "cornell");
+        for name in ["r = 1 uniform", "r = 1 adaptive", "r = 2 uniform"] {
+            assert_eq!(count(&svg, name), 2, "{name}");
+        }
     }
 }
