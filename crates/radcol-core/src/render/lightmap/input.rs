@@ -115,18 +115,23 @@ pub(super) fn interpolate(v: &[DVec3; 3], uv: &[[f64; 2]; 3], x: DVec3) -> [f64;
 /// The texel centres inside two triangles of `input` at `size` texels.
 fn overlaps(input: &[Vec<Corners>], size: u32) -> Overlap {
     let n = size as usize;
-    let mut owner: Vec<Option<(u32, u32)>> = vec![None; n * n];
+    // The first triangle over each texel: 1 + its index over all patches
+    // (4 bytes a texel: 1 GiB at the largest size), 0 for none.
+    let mut owner = vec![0u32; n * n];
+    let mut triangles: Vec<(u32, u32)> = Vec::new();
     let mut overlap = Overlap::default();
     for (j, tris) in input.iter().enumerate() {
         for (t, (_, uv)) in tris.iter().enumerate() {
             let me = (j as u32, t as u32);
+            triangles.push(me);
+            let id = triangles.len() as u32;
             raster(
                 uv.map(|c| c.map(|a| a * size as f64)),
                 n,
                 |i, _, _, inside| match owner[i] {
-                    Some(other) if inside => overlap.note(other, me),
-                    Some(_) => {}
-                    None => owner[i] = Some(me),
+                    0 => owner[i] = id,
+                    other if inside => overlap.note(triangles[other as usize - 1], me),
+                    _ => {}
                 },
             );
         }
