@@ -64,10 +64,9 @@ pub fn output(
 fn write(o: &Output, lm: &Baked, mesh: &Mesh, look: &Look) -> Result<String> {
     let shown = o.file.path.display().to_string();
     let size = lm.atlas.size;
-    let charts = if lm.atlas.is_input() {
-        "the scene's texture coordinates".to_string()
-    } else {
-        format!("{} charts", lm.atlas.charts.len())
+    let charts = match lm.atlas.generated_charts {
+        None => "the scene's texture coordinates".to_string(),
+        Some(n) => format!("{n} charts"),
     };
     let mut f = create(&o.file)?;
     let what = match o.kind {

@@ -269,7 +269,7 @@ pub fn look(spec: &LookSpec, s: &Setup) -> Look {
 
 impl Look {
     /// The lightmap's atlas of `surface` at `size` texels: the scene's
-    /// texture coordinates when it has them, else planar charts.
+    /// texture coordinates when it has them, else a generated layout.
     pub fn atlas(
         &self,
         surface: &radcol_core::geometry::Surface,

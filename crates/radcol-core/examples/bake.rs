@@ -123,7 +123,8 @@ fn main() -> Result<(), Error> {
         if atlas.is_input() {
             println!("wrote {out}: in the scene's texture coordinates");
         } else {
-            println!("wrote {out}: {} charts", atlas.charts.len());
+            let charts = atlas.generated_charts.unwrap_or_default();
+            println!("wrote {out}: {charts} charts");
         }
     }
     if let Some(out) = args.get(2) {

@@ -159,14 +159,14 @@ pub struct SolveArgs {
     /// Bake u_n into a UV lightmap and write it to FILE: .exr (linear radiance u/pi) or
     /// .png (tone-mapped); repeatable. The layout is the scene's own texture coordinates
     /// when every triangle has them in [0, 1] (glTF TEXCOORD_1, else TEXCOORD_0; OBJ vt),
-    /// else the triangles are unwrapped into planar charts (one per flat face of each
-    /// material) packed in one square atlas. With a lightmap, .glb/.gltf outputs hold the
+    /// else uvunwrap generates one (each material's triangles grown into charts, flattened
+    /// and packed in one square atlas). With a lightmap, .glb/.gltf outputs hold the
     /// scene's own triangles with texture coordinates and the lightmap as their unlit
     /// texture, instead of vertex colours on radcol's mesh.
     #[arg(help_heading = "Output", long, value_name = "FILE.exr|.png")]
     pub lightmap: Vec<PathBuf>,
 
-    /// Unwrap the lightmap into radcol's planar charts even when the scene has texture
+    /// Generate the lightmap's layout (uvunwrap) even when the scene has texture
     /// coordinates.
     #[arg(help_heading = "Output", long)]
     pub lightmap_unwrap: bool,

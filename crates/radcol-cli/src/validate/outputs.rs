@@ -84,7 +84,7 @@ pub struct LookSpec {
     /// The lightmap's size in texels, when one is baked (--lightmap or
     /// --lightmap-size).
     pub lightmap: Option<u32>,
-    /// --lightmap-unwrap: planar charts even when the scene has texture
+    /// --lightmap-unwrap: a generated layout even when the scene has texture
     /// coordinates.
     pub lightmap_unwrap: bool,
     /// --vertices: the vertex meshes on the scene's triangles, and with

@@ -8,7 +8,6 @@
 use super::{plane_of, raster, Atlas, Chart, RenderError};
 use crate::geometry::Surface;
 use glam::DVec3;
-use std::collections::HashMap;
 
 /// A surface triangle's corners in space and in texture coordinates.
 pub(super) type Corners = ([DVec3; 3], [[f64; 2]; 3]);
@@ -44,10 +43,13 @@ impl Atlas {
         }
         let (lo, hi) = surface.bounding_box();
         let scale = (hi - lo).length().max(f64::MIN_POSITIVE);
-        let (mut charts, mut chart_of, mut input) = (Vec::new(), HashMap::new(), Vec::new());
+        let (mut charts, mut input) = (Vec::new(), Vec::new());
         let (mut uv_area, mut area) = (0.0, 0.0);
         for (j, (patch, uvs)) in surface.patches.iter().zip(uvs).enumerate() {
-            let mut chart = Chart::new(j, DVec3::Z, 0.0);
+            let mut chart = Chart {
+                patch: j,
+                triangles: Vec::new(),
+            };
             let mut corners = Vec::new();
             for (t, (tri, uv)) in patch.triangles.iter().zip(uvs).enumerate() {
                 let at = || format!("patch '{}' triangle {t}", patch.name);
@@ -73,7 +75,6 @@ impl Atlas {
                 uv_area += a.abs();
                 area += 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
                 chart.triangles.push(t);
-                chart_of.insert((j as u32, t as u32), charts.len());
                 corners.push((v, *uv));
             }
             charts.push(chart);
@@ -89,14 +90,9 @@ impl Atlas {
                 0.0
             },
             charts,
-            chart_of,
-            input: Some(input),
+            generated_charts: None,
+            input,
         })
-    }
-
-    /// Whether the layout is the input's texture coordinates.
-    pub fn is_input(&self) -> bool {
-        self.input.is_some()
     }
 }
 

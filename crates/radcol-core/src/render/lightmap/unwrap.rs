@@ -1,0 +1,89 @@
+//! Lightmap layouts generated for scenes without texture coordinates, by
+//! the `uvunwrap` crate: each patch's triangles (vertices merged where they
+//! coincide, so charts grow across edges) are segmented into charts within
+//! a normal cone, flattened (planar faces exactly) and shape-packed at the
+//! largest density that fits one `size`² page, `GUTTER` texels of padding
+//! around each chart. The coordinates are then checked and used as the
+//! input's would be ([`Atlas::from_uvs`]).
+
+use super::{plane_of, Atlas, RenderError, GUTTER};
+use crate::geometry::Surface;
+use std::collections::HashMap;
+
+impl Atlas {
+    /// A generated layout of `surface`'s triangles at `size`×`size`
+    /// texels. Curved patches are refused (their elements are not planar).
+    ///
+    /// # Errors
+    /// A size outside 16..=16384, a curved patch, a scene with no triangle
+    /// of area, and charts that do not fit one page at any density.
+    pub fn new(surface: &Surface, size: u32) -> Result<Self, RenderError> {
+        let bad = |m: String| Err(RenderError::Lightmap(m));
+        if !(16..=16384).contains(&size) {
+            return bad(format!("atlas size {size}: must lie in 16..=16384 texels"));
+        }
+        let (lo, hi) = surface.bounding_box();
+        let scale = (hi - lo).length().max(f64::MIN_POSITIVE);
+        // Per patch: merged vertices (f32, relative to the scene's corner)
+        // and the triangles' indices.
+        let mut meshes: Vec<(Vec<[f32; 3]>, Vec<u32>)> = Vec::new();
+        let mut areas = 0usize;
+        for patch in &surface.patches {
+            let (mut positions, mut indices) = (Vec::new(), Vec::new());
+            let mut index_of: HashMap<[u64; 3], u32> = HashMap::new();
+            for tri in &patch.triangles {
+                areas += usize::from(plane_of(patch, tri, scale)?.is_some());
+                for x in tri.map(|x| patch.map.map(x)) {
+                    let i = *index_of
+                        .entry(x.to_array().map(f64::to_bits))
+                        .or_insert_with(|| {
+                            positions.push((x - lo).as_vec3().to_array());
+                            positions.len() as u32 - 1
+                        });
+                    indices.push(i);
+                }
+            }
+            meshes.push((positions, indices));
+        }
+        if areas == 0 {
+            return bad("the scene has no triangle to map".into());
+        }
+        let inputs: Vec<uvunwrap::MeshInput<'_>> = meshes
+            .iter()
+            .map(|(p, i)| uvunwrap::MeshInput::new(p, i))
+            .collect();
+        let options = uvunwrap::Options {
+            density: uvunwrap::Density::Auto { page_size: size },
+            padding: GUTTER,
+            ..Default::default()
+        };
+        let layout = uvunwrap::generate(&inputs, &options)
+            .map_err(|e| RenderError::Lightmap(format!("unwrapping the scene: {e}")))?;
+        if layout.page_count != 1 || layout.width > size || layout.height > size {
+            return bad(format!(
+                "{} charts do not fit one {size}×{size} atlas with their padding: give a larger size",
+                layout.chart_count
+            ));
+        }
+        // Page coordinates (of the page cropped to its rows) to the square.
+        let page = [layout.width, layout.height].map(|w| w as f64 / size as f64);
+        let uvs: Vec<Vec<[[f64; 2]; 3]>> = layout
+            .meshes
+            .iter()
+            .map(|out| {
+                out.indices
+                    .chunks_exact(3)
+                    .map(|t| {
+                        [0, 1, 2].map(|c| {
+                            let uv = out.vertices[t[c] as usize].uv;
+                            [0, 1].map(|a| (uv[a] as f64 * page[a]).clamp(0.0, 1.0))
+                        })
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut atlas = Atlas::from_uvs(surface, &uvs, size)?;
+        atlas.generated_charts = Some(layout.chart_count);
+        Ok(atlas)
+    }
+}
