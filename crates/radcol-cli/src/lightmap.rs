@@ -22,9 +22,13 @@ pub struct Baked {
     png: Vec<u8>,
 }
 
-/// Unwraps `mesh`'s surface into a `size`² atlas and bakes `solutions`.
+/// Bakes `solutions` into the layout made before the solve (or, for a
+/// caller that made none, `mesh`'s surface laid out in a `size`² atlas).
 fn bake_all(mesh: &Mesh, solutions: &[&Solution], look: &Look, size: u32) -> Result<Baked> {
-    let atlas = look.atlas(mesh.surface(), size).context("--lightmap")?;
+    let atlas = match &look.lightmap_atlas {
+        Some(atlas) => atlas.clone(),
+        None => look.atlas(mesh.surface(), size).context("--lightmap")?,
+    };
     let image = bake(mesh, solutions, &atlas).context("--lightmap")?;
     let pixels = tone_map(&image, &look.tone);
     let mut png = Vec::new();

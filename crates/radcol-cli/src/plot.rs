@@ -189,7 +189,7 @@ fn document(title: &str, [left, right]: &[Panel; 2]) -> String {
     if let Err(e) = drawn {
         return format!(
             "<svg xmlns=\"http://www.w3.org/2000/svg\"><text x=\"10\" y=\"20\">plot failed: {}</text></svg>\n",
-            e.to_string().replace('<', "&lt;").replace('&', "&amp;")
+            e.to_string().replace('&', "&amp;").replace('<', "&lt;")
         );
     }
     svg

@@ -240,6 +240,9 @@ pub struct Look {
     /// The scene's texture coordinates, the lightmap's layout when given
     /// (none with --lightmap-unwrap).
     pub lightmap_uvs: Option<Vec<Vec<[[f64; 2]; 3]>>>,
+    /// The lightmap's layout, made once before the solve (a generated one
+    /// costs an unwrap of the whole scene).
+    pub lightmap_atlas: Option<radcol_core::render::lightmap::Atlas>,
     /// Vertex meshes on the scene's triangles (and how corners are shared).
     pub input_vertices: Option<radcol_core::render::Corners>,
 }
@@ -263,6 +266,7 @@ pub fn look(spec: &LookSpec, s: &Setup) -> Look {
         lightmap_uvs: (spec.lightmap.is_some() && !spec.lightmap_unwrap)
             .then(|| s.loaded.scene().and_then(|sc| sc.uvs.clone()))
             .flatten(),
+        lightmap_atlas: None,
         input_vertices: spec.input_vertices,
     }
 }

@@ -63,15 +63,17 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
         points::precheck(at, &s)?;
     }
     let relit = relight::relit_problems(&job.relight, &s)?;
-    let look = setup::look(&job.look, &s);
+    let mut look = setup::look(&job.look, &s);
     if let Some(size) = look.lightmap {
-        // Unwrapped before the solve, so a surface that cannot be (curved)
-        // is refused before any work.
-        look.atlas(&s.problem.surface, size).map_err(|e| {
+        // Laid out before the solve, so a surface that cannot be (curved,
+        // overlapping coordinates) is refused before any work; kept for
+        // the bake.
+        let atlas = look.atlas(&s.problem.surface, size).map_err(|e| {
             let why = e.to_string();
             let why = why.strip_prefix("lightmap: ").unwrap_or(&why).to_string();
             crate::error::bad_input(format!("--lightmap: {why}"))
         })?;
+        look.lightmap_atlas = Some(atlas);
     }
     let bar = progress::Bar::for_stderr();
     s.cfg.progress = bar.as_ref().map(|b| b.handle());
