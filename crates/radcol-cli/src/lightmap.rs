@@ -1,4 +1,4 @@
-//! `--lightmap` and `--lightmap-size`: the solution baked into a UV atlas of
+//! `--lightmap`, `--lightmap-size` and `--lightmap-density`: the solution baked into a UV atlas of
 //! the scene's triangles ([`radcol_core::render::lightmap`]), written as EXR
 //! (linear radiance) or PNG (tone-mapped), and the lightmapped glTF.
 
@@ -9,7 +9,7 @@ use crate::setup::Look;
 use crate::validate::{Output, OutputKind};
 use anyhow::{Context, Result};
 use radcol_core::mesh::Mesh;
-use radcol_core::render::lightmap::{bake, Atlas};
+use radcol_core::render::lightmap::{bake, Atlas, Resolution};
 use radcol_core::render::{tone_map, Image};
 use radcol_core::solution::Solution;
 use std::io::Write;
@@ -23,16 +23,23 @@ pub struct Baked {
 }
 
 /// Bakes `solutions` into the layout made before the solve (or, for a
-/// caller that made none, `mesh`'s surface laid out in a `size`² atlas).
-fn bake_all(mesh: &Mesh, solutions: &[&Solution], look: &Look, size: u32) -> Result<Baked> {
+/// caller that made none, `mesh`'s surface laid out at `resolution`).
+fn bake_all(
+    mesh: &Mesh,
+    solutions: &[&Solution],
+    look: &Look,
+    resolution: Resolution,
+) -> Result<Baked> {
     let atlas = match &look.lightmap_atlas {
         Some(atlas) => atlas.clone(),
-        None => look.atlas(mesh.surface(), size).context("--lightmap")?,
+        None => look
+            .atlas(mesh.surface(), resolution)
+            .context("--lightmap")?,
     };
     let image = bake(mesh, solutions, &atlas).context("--lightmap")?;
     let pixels = tone_map(&image, &look.tone);
     let mut png = Vec::new();
-    export::png::write(&mut png, size, size, &pixels)?;
+    export::png::write(&mut png, atlas.size, atlas.size, &pixels)?;
     Ok(Baked { atlas, image, png })
 }
 
@@ -51,14 +58,14 @@ pub fn output(
         o.kind,
         OutputKind::LightmapExr | OutputKind::LightmapPng | OutputKind::Glb | OutputKind::Gltf
     );
-    let Some(size) = look.lightmap.filter(|_| uses) else {
+    let Some(resolution) = look.lightmap.filter(|_| uses) else {
         return Ok(None);
     };
     if baked.is_none() {
         if let Some(b) = bar {
-            b.spin(format!("baking a {size}×{size} lightmap"));
+            b.spin("baking the lightmap".to_string());
         }
-        *baked = Some(bake_all(mesh, solutions, look, size)?);
+        *baked = Some(bake_all(mesh, solutions, look, resolution)?);
     }
     let lm = baked.as_ref().expect("baked above");
     write(o, lm, mesh, look).map(Some)
@@ -72,6 +79,7 @@ fn write(o: &Output, lm: &Baked, mesh: &Mesh, look: &Look) -> Result<String> {
         None => "the scene's texture coordinates".to_string(),
         Some(n) => format!("{n} charts"),
     };
+    let charts = format!("{charts}, {:.4} texels per unit", lm.atlas.density);
     let mut f = create(&o.file)?;
     let what = match o.kind {
         OutputKind::LightmapExr => {

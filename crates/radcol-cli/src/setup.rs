@@ -235,8 +235,8 @@ pub struct Look {
     /// Whether the surface is a scene whose objects (OBJ groups, glTF
     /// nodes) become glTF nodes of their own.
     pub objects: bool,
-    /// The lightmap's size in texels, when one is baked.
-    pub lightmap: Option<u32>,
+    /// The lightmap's size or texel density, when one is baked.
+    pub lightmap: Option<radcol_core::render::lightmap::Resolution>,
     /// The scene's texture coordinates, the lightmap's layout when given
     /// (none with --lightmap-unwrap).
     pub lightmap_uvs: Option<Vec<Vec<[[f64; 2]; 3]>>>,
@@ -272,18 +272,18 @@ pub fn look(spec: &LookSpec, s: &Setup) -> Look {
 }
 
 impl Look {
-    /// The lightmap's atlas of `surface` at `size` texels: the scene's
+    /// The lightmap's atlas of `surface` at `resolution`: the scene's
     /// texture coordinates when it has them, else a generated layout.
     pub fn atlas(
         &self,
         surface: &radcol_core::geometry::Surface,
-        size: u32,
+        resolution: radcol_core::render::lightmap::Resolution,
     ) -> Result<radcol_core::render::lightmap::Atlas, radcol_core::render::RenderError> {
-        use radcol_core::render::lightmap::Atlas;
-        match &self.lightmap_uvs {
-            Some(uvs) => Atlas::from_uvs(surface, uvs, size),
-            None => Atlas::new(surface, size),
-        }
+        radcol_core::render::lightmap::Atlas::layout(
+            surface,
+            self.lightmap_uvs.as_deref(),
+            resolution,
+        )
     }
 }
 

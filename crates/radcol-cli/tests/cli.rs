@@ -1996,7 +1996,7 @@ fn lightmaps_in_the_scenes_texture_coordinates() {
     let out = radcol_ok(&[&["solve", &obj, "-o", &glb][..], &common[..]].concat());
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
-        text.contains("64×64 lightmap (the scene's texture coordinates)"),
+        text.contains("64×64 lightmap (the scene's texture coordinates, "),
         "{text}"
     );
     let (doc, buffers, _) = gltf::import(&glb).unwrap();
@@ -2027,7 +2027,39 @@ fn lightmaps_in_the_scenes_texture_coordinates() {
         .concat(),
     );
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("64×64 lightmap (2 charts)"), "{text}");
+    assert!(text.contains("64×64 lightmap (2 charts, "), "{text}");
+    // At a texel density: the scene's coordinates (4 units² on 0.25 + 0.2
+    // of the square) need 20 · √(4 / 0.45) = 59.6 texels a side; generated
+    // charts are packed at exactly 20 texels per unit.
+    let dense = ["--level", "1", "--no-estimate", "--lightmap-density", "20"];
+    let out = radcol_ok(&[&["solve", &obj, "-o", &path("d.glb")][..], &dense[..]].concat());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("60×60 lightmap (the scene's texture coordinates, 20.1"),
+        "{text}"
+    );
+    let out = radcol_ok(
+        &[
+            &["solve", &obj, "--lightmap-unwrap", "-o", &path("e.glb")][..],
+            &dense[..],
+        ]
+        .concat(),
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("(2 charts, 20.0000 texels per unit)"),
+        "{text}"
+    );
+    for (d, why) in [
+        ("0", "must be a positive number"),
+        ("1e6", "more than 16384"),
+    ] {
+        assert_one_line_error(
+            &["solve", &obj, "--lightmap-density", d, "-o", &path("f.glb")],
+            2,
+            &["--lightmap", why],
+        );
+    }
     std::fs::write(&obj, plates(0.1)).unwrap();
     assert_one_line_error(
         &["solve", &obj, "--lightmap", &path("x.exr")],

@@ -23,7 +23,7 @@ pub use crate::camera::Camera;
 pub use crate::problem::{Field, Problem};
 pub use crate::progress::{Progress, ProgressHandle};
 pub use crate::query::{query, PointEvaluator, PointValues, QueryError, QueryPoint, DEFAULT_SNAP};
-pub use crate::render::lightmap::{bake as bake_lightmap, Atlas};
+pub use crate::render::lightmap::{bake as bake_lightmap, Atlas, Resolution};
 pub use crate::render::{
     input_vertex_mesh, render, tone_map, vertex_mesh, Corners, Image, RenderError, RenderOptions,
     ToneMap, VertexMesh,

@@ -176,6 +176,19 @@ pub struct SolveArgs {
     #[arg(help_heading = "Output", long, value_name = "N")]
     pub lightmap_size: Option<u32>,
 
+    /// Lightmap texel density in texels per scene unit of length, instead of a size: the
+    /// square atlas is as large as the layout needs (a generated layout packs its charts at
+    /// exactly this density; the scene's own coordinates get at least it on average); given
+    /// alone, .glb/.gltf outputs are lightmapped without a separate file.
+    #[arg(
+        help_heading = "Output",
+        long,
+        value_name = "TEXELS_PER_UNIT",
+        conflicts_with = "lightmap_size",
+        allow_hyphen_values = true
+    )]
+    pub lightmap_density: Option<f64>,
+
     /// The scene's unit, for .glb/.gltf (whose unit is the metre): mm, cm, m, km, in, ft or
     /// metres per unit; the root node scales the positions, which stay in the input's units
     /// [default: the scene's own (glTF input: m; the built-in Cornell box: mm), else m].

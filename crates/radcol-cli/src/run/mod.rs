@@ -64,11 +64,11 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
     }
     let relit = relight::relit_problems(&job.relight, &s)?;
     let mut look = setup::look(&job.look, &s);
-    if let Some(size) = look.lightmap {
+    if let Some(resolution) = look.lightmap {
         // Laid out before the solve, so a surface that cannot be (curved,
         // overlapping coordinates) is refused before any work; kept for
         // the bake.
-        let atlas = look.atlas(&s.problem.surface, size).map_err(|e| {
+        let atlas = look.atlas(&s.problem.surface, resolution).map_err(|e| {
             let why = e.to_string();
             let why = why.strip_prefix("lightmap: ").unwrap_or(&why).to_string();
             crate::error::bad_input(format!("--lightmap: {why}"))

@@ -4,6 +4,7 @@
 use crate::args::{SolveArgs, TonemapArg, VerticesArg};
 use crate::error::{bad_input, BadInput};
 use radcol_core::camera::Camera;
+use radcol_core::render::lightmap::Resolution;
 use radcol_core::render::{RenderOptions, ToneMap, ToneOperator};
 use std::path::{Path, PathBuf};
 
@@ -81,9 +82,9 @@ pub struct LookSpec {
     pub tessellation: Option<u32>,
     /// --units: metres per scene unit, when given.
     pub metres_per_unit: Option<f64>,
-    /// The lightmap's size in texels, when one is baked (--lightmap or
-    /// --lightmap-size).
-    pub lightmap: Option<u32>,
+    /// The lightmap's size or texel density, when one is baked
+    /// (--lightmap, --lightmap-size or --lightmap-density).
+    pub lightmap: Option<Resolution>,
     /// --lightmap-unwrap: a generated layout even when the scene has texture
     /// coordinates.
     pub lightmap_unwrap: bool,
@@ -92,15 +93,24 @@ pub struct LookSpec {
     pub input_vertices: Option<radcol_core::render::Corners>,
 }
 
-/// The lightmap's size when one is asked for.
-fn lightmap_size(a: &SolveArgs) -> Result<Option<u32>, BadInput> {
+/// The lightmap's size or density when one is asked for (1024 texels a
+/// side by default).
+fn lightmap_size(a: &SolveArgs) -> Result<Option<Resolution>, BadInput> {
     if let Some(n) = a.lightmap_size.filter(|n| !(16..=16384).contains(n)) {
         return Err(bad_input(format!(
             "--lightmap-size {n}: must lie in 16..=16384 texels"
         )));
     }
-    Ok((!a.lightmap.is_empty() || a.lightmap_size.is_some())
-        .then(|| a.lightmap_size.unwrap_or(1024)))
+    if let Some(d) = a.lightmap_density.filter(|d| !(d.is_finite() && *d > 0.0)) {
+        return Err(bad_input(format!(
+            "--lightmap-density {d}: must be a positive number of texels per scene unit"
+        )));
+    }
+    let asked = !a.lightmap.is_empty() || a.lightmap_size.is_some() || a.lightmap_density.is_some();
+    Ok(asked.then(|| match (a.lightmap_size, a.lightmap_density) {
+        (_, Some(d)) => Resolution::Density(d),
+        (n, None) => Resolution::Size(n.unwrap_or(1024)),
+    }))
 }
 
 /// A `--lightmap` file: EXR or PNG by its extension.

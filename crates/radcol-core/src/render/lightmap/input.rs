@@ -96,6 +96,56 @@ impl Atlas {
     }
 }
 
+impl Atlas {
+    /// The atlas of the input's texture coordinates `uvs` sized for
+    /// `texels_per_unit` texels per scene unit of length on average: the
+    /// side is `texels_per_unit` · √(surface area / coordinate area),
+    /// rounded up, at least 16 (so `density` is at least the one asked).
+    ///
+    /// # Errors
+    /// A density that is not positive and finite or that needs more than
+    /// 16384 texels a side (the error says the largest that fits), and
+    /// the errors of [`Atlas::from_uvs`].
+    pub fn from_uvs_with_density(
+        surface: &Surface,
+        uvs: &[Vec<[[f64; 2]; 3]>],
+        texels_per_unit: f64,
+    ) -> Result<Self, RenderError> {
+        let bad = |m: String| Err(RenderError::Lightmap(m));
+        if !(texels_per_unit.is_finite() && texels_per_unit > 0.0) {
+            return bad(format!(
+                "texel density {texels_per_unit}: must be positive and finite"
+            ));
+        }
+        let (mut uv_area, mut area) = (0.0, 0.0);
+        for (patch, uvs) in surface.patches.iter().zip(uvs) {
+            for (tri, uv) in patch.triangles.iter().zip(uvs) {
+                let v = tri.map(|x| patch.map.map(x));
+                area += 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
+                uv_area += 0.5
+                    * ((uv[1][0] - uv[0][0]) * (uv[2][1] - uv[0][1])
+                        - (uv[2][0] - uv[0][0]) * (uv[1][1] - uv[0][1]))
+                        .abs();
+            }
+        }
+        let side = texels_per_unit * (area / uv_area).sqrt();
+        if !side.is_finite() {
+            // No coordinate area (or no area at all): from_uvs says which
+            // triangle.
+            return Self::from_uvs(surface, uvs, 16);
+        }
+        if side > 16384.0 {
+            let fits = 16384.0 * (uv_area / area).sqrt();
+            return bad(format!(
+                "texel density {texels_per_unit}: the texture coordinates need a \
+                 {side:.0}×{side:.0} atlas, more than 16384 texels a side; a density up to \
+                 about {fits:.3e} fits"
+            ));
+        }
+        Self::from_uvs(surface, uvs, (side.ceil() as u32).max(16))
+    }
+}
+
 /// The texture coordinates at `x` of the flat triangle `v` whose corners
 /// have `uv` (affine in the triangle's plane; x projected onto it).
 pub(super) fn interpolate(v: &[DVec3; 3], uv: &[[f64; 2]; 3], x: DVec3) -> [f64; 2] {
@@ -247,6 +297,33 @@ mod tests {
         // the mean density: floor 0.9 × 0.4 of the atlas for 2 units²
         let texels = (0.9 * 0.4 * 0.5 + 0.3 * 0.2 * 0.5) * 2.0 * 65536.0;
         crate::assert_close!(atlas.density, (texels / 4.0f64).sqrt(), 1e-9);
+    }
+
+    /// At a chosen density the side is density · √(area / coordinate
+    /// area), rounded up (here 4 units² on 0.4 · 0.9 + 0.3 · 0.2 = 0.42 of
+    /// the square), at least 16; densities needing more than 16384 texels
+    /// or not positive are refused.
+    #[test]
+    fn a_chosen_density_sizes_the_atlas() {
+        let s = scene([[0.6, 0.1], [0.9, 0.1], [0.9, 0.3], [0.6, 0.3]]);
+        let uvs = s.uvs.as_ref().unwrap();
+        let ratio = (4.0f64 / 0.42).sqrt();
+        let atlas = Atlas::from_uvs_with_density(&s.surface, uvs, 100.0).unwrap();
+        assert_eq!(atlas.size, (100.0 * ratio).ceil() as u32);
+        assert!(atlas.density >= 100.0 && atlas.density < 100.0 * (1.0 + 1.0 / 400.0));
+        let small = Atlas::from_uvs_with_density(&s.surface, uvs, 1.0).unwrap();
+        assert_eq!(small.size, 16);
+        let e = Atlas::from_uvs_with_density(&s.surface, uvs, 1e4)
+            .unwrap_err()
+            .to_string();
+        let fits = format!("{:.3e}", 16384.0 / ratio);
+        assert!(e.contains("more than 16384") && e.contains(&fits), "{e}");
+        for d in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let e = Atlas::from_uvs_with_density(&s.surface, uvs, d)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("must be positive and finite"), "{d}: {e}");
+        }
     }
 
     /// A lamp mapped onto the floor's texels is refused, naming a triangle

@@ -8,6 +8,8 @@
 //! the `uvunwrap` crate (xatlas-style: charts grown within a normal cone,
 //! flattened, shape-packed at the largest density that fits one page, with
 //! [`GUTTER`] texels of padding), then used exactly as input coordinates.
+//! Either is sized by its side in texels or by a texel density
+//! ([`Resolution`], [`Atlas::layout`]).
 //!
 //! **Baking.** Every element of the solve's mesh lies in one surface
 //! triangle; its corners are mapped into the layout through that
@@ -37,6 +39,17 @@ pub const GUTTER: u32 = 2;
 /// with 2).
 pub const DILATION: u32 = 16;
 
+/// How large a lightmap is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Resolution {
+    /// Width and height in texels (16..=16384).
+    Size(u32),
+    /// Texels per scene unit of length; the atlas is as large as the
+    /// layout needs at that density ([`Atlas::with_density`],
+    /// [`Atlas::from_uvs_with_density`]).
+    Density(f64),
+}
+
 /// One chart of the atlas: the triangles of one patch.
 #[derive(Clone, Debug)]
 pub struct Chart {
@@ -64,6 +77,26 @@ pub struct Atlas {
 }
 
 impl Atlas {
+    /// The lightmap layout of `surface` at `resolution`: the input's
+    /// texture coordinates `uvs` (as [`crate::scene::Scene::uvs`]) when
+    /// given, else a generated one.
+    ///
+    /// # Errors
+    /// Those of [`Atlas::new`], [`Atlas::with_density`],
+    /// [`Atlas::from_uvs`] and [`Atlas::from_uvs_with_density`].
+    pub fn layout(
+        surface: &crate::geometry::Surface,
+        uvs: Option<&[Vec<[[f64; 2]; 3]>]>,
+        resolution: Resolution,
+    ) -> Result<Self, RenderError> {
+        match (uvs, resolution) {
+            (Some(uvs), Resolution::Size(n)) => Self::from_uvs(surface, uvs, n),
+            (Some(uvs), Resolution::Density(d)) => Self::from_uvs_with_density(surface, uvs, d),
+            (None, Resolution::Size(n)) => Self::new(surface, n),
+            (None, Resolution::Density(d)) => Self::with_density(surface, d),
+        }
+    }
+
     /// Atlas coordinates (texels, from the top-left corner) of `x` on
     /// triangle `t` of `chart`: its texture coordinates interpolated.
     pub fn texel_on(&self, chart: &Chart, t: usize, x: DVec3) -> [f64; 2] {
@@ -300,6 +333,48 @@ mod tests {
             "{} of {best}",
             atlas.density
         );
+    }
+
+    /// A generated layout at a chosen density: the flattening keeps
+    /// lengths, so every triangle of area A covers density² · A texels, and
+    /// the square atlas is no smaller than the surface needs at that
+    /// density and at most twice as wide; a density whose atlas would pass
+    /// 16384 texels, or that is not positive, is refused.
+    #[test]
+    fn generated_layout_at_a_chosen_density() {
+        let surface = cornell();
+        let d = 0.25; // texels per millimetre
+        let atlas = Atlas::with_density(&surface, d).unwrap();
+        let n = atlas.size as f64;
+        let mut area = 0.0;
+        for (j, tris) in atlas.input.iter().enumerate() {
+            for (t, (v, c)) in tris.iter().enumerate() {
+                let a = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
+                let texels = 0.5
+                    * ((c[1][0] - c[0][0]) * (c[2][1] - c[0][1])
+                        - (c[2][0] - c[0][0]) * (c[1][1] - c[0][1]))
+                        .abs()
+                    * n
+                    * n;
+                area += a;
+                if a > 1.0 {
+                    let want = d * d * a;
+                    assert!(
+                        (texels - want).abs() < 1e-3 * want,
+                        "{j}/{t}: {texels} of {want}"
+                    );
+                }
+            }
+        }
+        crate::assert_close!(atlas.density, d, 1e-4 * d);
+        let least = d * area.sqrt();
+        assert!(n >= least && n <= 2.0 * least, "{n} texels for {least}");
+        let e = Atlas::with_density(&surface, 100.0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("more than 16384 texels a side"), "{e}");
+        let e = Atlas::with_density(&surface, 0.0).unwrap_err().to_string();
+        assert!(e.contains("must be positive and finite"), "{e}");
     }
 
     /// A u_n that is linear in position (degree 1, its nodal values the
