@@ -8,8 +8,8 @@
 //!
 //!     cargo run --release -p radcol-benches --example hmatrix [-- TOL [EDGE ...]]
 //!
-//! The entries come from the dense assembly plan, whose pair-class table is
-//! n² bytes (n elements): that table, not the H-matrix, bounds the size here.
+//! The entries come from the assembly plan, which classifies all n² element
+//! pairs (its table keeps them as runs of equal classes).
 
 use radcol_core::assembly::{AssemblyBackend, AssemblyPlan, CpuBackend, QuadratureOptions};
 use radcol_core::discretization::Discretization;

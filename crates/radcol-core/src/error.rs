@@ -177,17 +177,18 @@ pub enum InputError {
         /// False when the count stopped (at four times the memory
         /// available) before the end.
         complete: bool,
-        /// n² bytes of pair classes.
+        /// Expected bytes of pair classes
+        /// ([`crate::assembly::pair_table_bytes`]).
         pair_table: f64,
         /// Bytes available.
         available: u64,
     },
     /// The plan's table of element pair classes would not fit in memory.
-    #[error("{} need a table of their element pairs' classes of {} (one byte per pair, kept by the assembly plan for the compressed operator too), but only {} of memory is available; use a coarser mesh", elements_text(*elements), gib(*bytes), gib(*available as f64))]
+    #[error("{} need a table of their element pairs' classes of {} (kept by the assembly plan as runs of equal classes, about 40 n^1.5 bytes for n elements), but only {} of memory is available; use a coarser mesh", elements_text(*elements), gib(*bytes), gib(*available as f64))]
     PairTableTooLarge {
         /// Elements n.
         elements: u64,
-        /// n² bytes.
+        /// Its expected bytes ([`crate::assembly::pair_table_bytes`]).
         bytes: f64,
         /// Bytes available.
         available: u64,

@@ -147,9 +147,9 @@ fn special_pairs(plan: &AssemblyPlan) -> Special {
     let classes = plan.classes();
     let kps: Vec<usize> = (0..n)
         .filter(|&kp| {
-            classes[kp * n..(kp + 1) * n]
-                .iter()
-                .any(|&c| PairClass::from_code(c).is_special())
+            classes
+                .runs(kp, 0..n)
+                .any(|(_, c)| PairClass::from_code(c).is_special())
         })
         .collect();
     let results: Vec<(SpecialBlock, u64)> = kps
@@ -160,7 +160,7 @@ fn special_pairs(plan: &AssemblyPlan) -> Special {
                 // SpecialOnly writes exactly the entries read back below.
                 let evals = plan.fill_block(kp, scratch, FillMode::SpecialOnly);
                 let pairs = (0..n)
-                    .filter(|&k| PairClass::from_code(classes[kp * n + k]).is_special())
+                    .filter(|&k| PairClass::from_code(classes.get(kp, k)).is_special())
                     .map(|k| {
                         let mut vals = Vec::with_capacity(f * f);
                         for row in 0..f {

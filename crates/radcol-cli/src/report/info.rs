@@ -150,7 +150,8 @@ pub struct ShapeRatio {
 pub struct CompressedInfo {
     /// The hierarchical matrix's bytes ([`radcol_core::hmatrix::HMatrix::predict`]).
     pub prediction: radcol_core::hmatrix::HPrediction,
-    /// The plan's table of element pair classes: n² bytes.
+    /// The plan's table of element pair classes, as expected
+    /// ([`radcol_core::assembly::pair_table_bytes`]).
     pub pair_table_bytes: f64,
 }
 

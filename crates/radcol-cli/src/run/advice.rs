@@ -27,14 +27,14 @@ pub fn sized(err: CoreError, s: &Setup) -> anyhow::Error {
             available,
             ..
         }) => (matrix / 8.0).sqrt() * (0.9 * *available as f64 / to_come).sqrt(),
-        // The compressed operator's a priori limit: n² bytes of pair classes.
+        // The compressed operator's a priori limit: its table of pair classes.
         CoreError::Input(InputError::PairTableTooLarge { available, .. }) => {
             let per_element = radcol_core::nodes::nodes_per_element(s.cfg.degree) as f64;
-            (0.9 * *available as f64).sqrt() * per_element
+            radcol_core::assembly::pair_table_elements(0.9 * *available as f64) * per_element
         }
         // The operator grows like N (its dense blocks near the diagonal),
-        // the pair table like N²: the t = N'/N where the two fill 0.9 of
-        // what is available.
+        // the pair table as pair_table_bytes: the t = N'/N where the two
+        // fill 0.9 of what is available (by bisection: both grow with t).
         CoreError::Input(InputError::CompressedWontFit {
             unknowns,
             operator,
@@ -43,13 +43,22 @@ pub fn sized(err: CoreError, s: &Setup) -> anyhow::Error {
             ..
         }) => {
             let a = 0.9 * *available as f64;
-            let t = if *pair_table > 0.0 {
-                ((operator * operator + 4.0 * pair_table * a).sqrt() - operator)
-                    / (2.0 * pair_table)
-            } else {
-                a / operator
+            let per_element = radcol_core::nodes::nodes_per_element(s.cfg.degree) as f64;
+            let elements = *unknowns as f64 / per_element;
+            let table = |t: f64| {
+                let b = radcol_core::assembly::pair_table_bytes;
+                pair_table * b(t * elements) / b(elements).max(f64::MIN_POSITIVE)
             };
-            *unknowns as f64 * t
+            let (mut lo, mut hi) = (0.0, 1.0);
+            for _ in 0..200 {
+                let t = 0.5 * (lo + hi);
+                if operator * t + table(t) > a {
+                    hi = t;
+                } else {
+                    lo = t;
+                }
+            }
+            *unknowns as f64 * lo
         }
         _ => return with_flags(err),
     };

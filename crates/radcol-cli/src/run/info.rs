@@ -176,13 +176,13 @@ fn predict_compressed(degree: usize, mesh: &Arc<Mesh>) -> Option<CompressedInfo>
     let limit = radcol_core::run::available_memory().map_or(f64::INFINITY, |a| 4.0 * a as f64);
     Some(CompressedInfo {
         prediction: radcol_core::hmatrix::radiosity::predict(&disc, &HOptions::default(), limit),
-        pair_table_bytes: (mesh.len() as f64).powi(2),
+        pair_table_bytes: radcol_core::assembly::pair_table_bytes(mesh.len() as f64),
     })
 }
 
 /// Row blocks timed by `radcol info` to estimate the assembly time.
 const INFO_SAMPLE_BLOCKS: usize = 24;
-/// Largest mesh whose assembly `radcol info` plans (the plan holds n² classes).
+/// Largest mesh whose assembly `radcol info` plans (classifying n² pairs).
 const INFO_MAX_PLANNED_ELEMENTS: u64 = 6000;
 
 /// Plans the assembly on `mesh` (the job's) and times a few row blocks spread

@@ -19,7 +19,10 @@ pub use cpu::CpuBackend;
 pub use integrate::{
     ElementIntegrator, FieldPoint, QuadratureOptions, Shortfall, VisibilityMode, MIN_QUAD_TOL,
 };
-pub use plan::{AssemblyPlan, FarTable, FillMode, PairClass, PlanStats, Unchanged};
+pub use plan::{pair_table_bytes, pair_table_elements};
+pub use plan::{
+    AssemblyPlan, ClassTable, FarTable, FillMode, PairClass, PlanStats, Runs, Unchanged,
+};
 
 pub use crate::backend::{BackendKind, Scalar};
 

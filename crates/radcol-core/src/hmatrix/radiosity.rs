@@ -145,9 +145,25 @@ impl PlanEntries<'_> {
         let mut col_elems: Vec<usize> = cols.iter().map(|&j| j / f).collect();
         col_elems.sort_unstable();
         col_elems.dedup();
-        row_elems
-            .iter()
-            .all(|&kp| col_elems.iter().all(|&k| ok(self.plan.class(kp, k))))
+        let (Some(&first), Some(&last)) = (col_elems.first(), col_elems.last()) else {
+            return true;
+        };
+        // Each row's runs over the columns' span, walked beside the sorted
+        // columns: no search per pair.
+        let classes = self.plan.classes();
+        row_elems.iter().all(|&kp| {
+            let mut cols = col_elems.iter().peekable();
+            classes.runs(kp, first..last + 1).all(|(run, code)| {
+                let mut fine = true;
+                while cols.next_if(|&&k| k < run.end).is_some() {
+                    fine = ok(PairClass::from_code(code));
+                    if !fine {
+                        break;
+                    }
+                }
+                fine
+            })
+        })
     }
 }
 

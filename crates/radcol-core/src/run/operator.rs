@@ -137,8 +137,9 @@ pub fn decide(
 /// [`decide`] with the memory available now, and, when
 /// `cfg.check_memory`, the refusals of what cannot fit before anything is
 /// built: the dense matrices ([`MemoryEstimate::check`]), or for the
-/// compressed operator the plan's n² bytes of pair classes (its own size
-/// is known once built: [`super::MemoryUse::check`]).
+/// compressed operator the plan's table of pair classes
+/// ([`crate::assembly::pair_table_bytes`]; the operator's own size is
+/// predicted next, and known once built: [`super::MemoryUse::check`]).
 pub(crate) fn decide_now(
     cfg: &SolveConfig,
     unknowns: u64,
@@ -154,7 +155,7 @@ pub(crate) fn decide_now(
             MemoryEstimate::with_available(unknowns, available).check(cfg.solver)?
         }
         OperatorKind::Compressed => {
-            let bytes = (elements as f64).powi(2);
+            let bytes = crate::assembly::pair_table_bytes(elements as f64);
             if let Some(a) = available.filter(|&a| bytes > (a / 10 * 9) as f64) {
                 return Err(InputError::PairTableTooLarge {
                     elements,
@@ -196,7 +197,7 @@ pub(crate) fn lighter_than_dense(
         return None;
     }
     let dense = 8.0 * (disc.len() as f64).powi(2);
-    let pair_table = (disc.mesh().len() as f64).powi(2);
+    let pair_table = crate::assembly::pair_table_bytes(disc.mesh().len() as f64);
     let limit = LIGHTER * dense - pair_table;
     let p = crate::hmatrix::radiosity::predict(disc, &cfg.compression, limit.max(0.0));
     if !p.complete || p.bytes() > limit {
@@ -222,7 +223,7 @@ pub(crate) fn lighter_than_dense(
 /// The compressed operator of `disc` under `cfg`, predicted from the
 /// geometry ([`crate::hmatrix::radiosity::predict`], counted no further
 /// than four times the memory available); when `cfg.check_memory`, refused where
-/// with the plan's n² bytes of pair classes it passes nine tenths of the
+/// with the plan's table of pair classes it passes nine tenths of the
 /// memory available.
 ///
 /// # Errors
@@ -232,7 +233,7 @@ pub(crate) fn predict_compressed(
     cfg: &SolveConfig,
 ) -> Result<HPrediction, InputError> {
     let available = available_memory().filter(|_| cfg.check_memory);
-    let pair_table = (disc.mesh().len() as f64).powi(2);
+    let pair_table = crate::assembly::pair_table_bytes(disc.mesh().len() as f64);
     // Counted on past what fits, to four times as much, so that a refusal
     // can say how much coarser would fit.
     let limit = available.map_or(f64::INFINITY, |a| 4.0 * (a / 10 * 9) as f64);

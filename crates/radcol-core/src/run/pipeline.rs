@@ -69,9 +69,9 @@ fn assemble(
 ) -> Result<Built, Error> {
     let mut decision = decide_now(cfg, disc.len() as u64, disc.mesh().len() as u64)?;
     let compressed = decision.kind == OperatorKind::Compressed;
-    // The compressed operator is sized from the geometry before the plan's
-    // n² pair classes and the hours of entries a size that cannot fit
-    // would take.
+    // The compressed operator is sized from the geometry before the plan
+    // (n² pairs classified) and the hours of entries a size that cannot
+    // fit would take.
     if compressed {
         decision.predicted_bytes = Some(predict_compressed(disc, cfg)?.bytes());
     }

@@ -5,7 +5,7 @@
 use crate::error::GpuError;
 use crate::layout::{GpuScalar, Params, RuleInfo, RULE_SLOTS};
 use crate::tiling::Tile;
-use radcol_core::assembly::{AssemblyPlan, FarTable};
+use radcol_core::assembly::{AssemblyPlan, ClassTable, FarTable};
 use radcol_core::quadrature::MAX_RULE_DEGREE;
 use rayon::prelude::*;
 
@@ -82,13 +82,13 @@ pub(super) fn far_points<S: GpuScalar>(rules: &Rules<'_>, k0: usize, nk: usize) 
 
 /// The class codes of the row blocks that `tile` touches against its `nk`
 /// elements, block-major, padded with zeros to a multiple of four bytes
-/// (the shader reads them as u32). `classes` is the plan's `n × n` table.
-pub(super) fn tile_codes(classes: &[u8], n: usize, f: usize, tile: &Tile) -> Vec<u8> {
+/// (the shader reads them as u32). `classes` is the plan's table.
+pub(super) fn tile_codes(classes: &ClassTable, f: usize, tile: &Tile) -> Vec<u8> {
     let kp0 = tile.row0 / f;
     let kp1 = (tile.row0 + tile.rows - 1) / f + 1;
     let mut codes = Vec::with_capacity(((kp1 - kp0) * tile.nk).div_ceil(4) * 4);
     for kp in kp0..kp1 {
-        codes.extend_from_slice(&classes[kp * n + tile.k0..kp * n + tile.k0 + tile.nk]);
+        codes.extend_from_slice(&classes.row(kp, tile.k0..tile.k0 + tile.nk));
     }
     codes.resize(codes.len().div_ceil(4) * 4, 0);
     codes
@@ -188,7 +188,6 @@ mod tests {
     #[test]
     fn tile_codes_and_params_describe_the_tile() {
         let plan = plan();
-        let n = plan.discretization().mesh().len();
         let f = plan.discretization().nodes_per_element();
         // Rows 4..10 touch row blocks 1..=3 (f = 3); elements 2..7.
         let tile = Tile {
@@ -197,11 +196,11 @@ mod tests {
             k0: 2,
             nk: 5,
         };
-        let codes = tile_codes(plan.classes(), n, f, &tile);
+        let codes = tile_codes(plan.classes(), f, &tile);
         assert_eq!(codes.len(), (3 * 5usize).div_ceil(4) * 4);
         for (b, kp) in (1..=3).enumerate() {
             for e in 0..5 {
-                assert_eq!(codes[b * 5 + e], plan.classes()[kp * n + 2 + e]);
+                assert_eq!(codes[b * 5 + e], plan.class(kp, 2 + e).code());
             }
         }
         assert!(codes[15..].iter().all(|&c| c == 0));

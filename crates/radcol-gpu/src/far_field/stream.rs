@@ -269,7 +269,7 @@ pub(super) fn run<S: GpuScalar>(
             queue.write_buffer(&statics.far_points, 0, bytemuck::cast_slice(&geom));
         }
         let slot = &slots[t % 2];
-        queue.write_buffer(&slot.classes, 0, &tile_codes(classes, n, f, &tile));
+        queue.write_buffer(&slot.classes, 0, &tile_codes(classes, f, &tile));
         let params = tile_params(&tile, f, rules.stride)?;
         queue.write_buffer(&slot.params, 0, bytemuck::bytes_of(&params));
         let bytes = (tile.rows * tile.nk * f * sb) as u64;

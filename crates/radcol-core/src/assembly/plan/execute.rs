@@ -91,7 +91,7 @@ impl AssemblyPlan {
         let f_rows = self.rows().nodes_per_element();
         let ncols = n * f;
         debug_assert_eq!(block.len(), f_rows * ncols);
-        let classes = &self.classes[kp * n..(kp + 1) * n];
+        let classes = self.classes.row(kp, 0..n);
         let integrator = self.integrator();
         let nodes = self.disc.nodes();
         let phi = |_k: usize, st: [f64; 2], _q: DVec3, out: &mut [f64]| {
@@ -168,12 +168,10 @@ impl AssemblyPlan {
         elements: std::ops::Range<usize>,
         out: &mut [f64],
     ) -> u64 {
-        let n = self.disc.mesh().len();
         let f = self.disc.nodes_per_element();
         let f_rows = self.rows().nodes_per_element();
         let ncols = elements.len() * f;
         debug_assert_eq!(out.len(), rows.len() * ncols);
-        let classes = &self.classes[kp * n..(kp + 1) * n];
         let integrator = self.integrator();
         let nodes = self.disc.nodes();
         let phi = |_k: usize, st: [f64; 2], _q: DVec3, out: &mut [f64]| {
@@ -194,21 +192,12 @@ impl AssemblyPlan {
         // Sized to the run, not RUN_CHUNK: samples of one element are common.
         let mut g = vec![0.0f64; elements.len().min(RUN_CHUNK) * max_nq];
         let mut evals = 0u64;
-        let mut k = elements.start;
-        while k < elements.end {
-            let class = classes[k];
-            let mut end = k + 1;
-            while end < elements.end && end - k < RUN_CHUNK && classes[end] == class {
-                end += 1;
+        for (run, class) in self.classes.runs(kp, elements) {
+            for start in run.clone().step_by(RUN_CHUNK) {
+                let chunk = start..(start + RUN_CHUNK).min(run.end);
+                let class = PairClass::from_code(class);
+                evals += fill.run(class, chunk, out, FillMode::All, &mut g);
             }
-            evals += fill.run(
-                PairClass::from_code(class),
-                k..end,
-                out,
-                FillMode::All,
-                &mut g,
-            );
-            k = end;
         }
         evals
     }

@@ -12,12 +12,17 @@
 //! ([`crate::visibility`]), `tables` (far-rule data), `execute` (filling a
 //! row block) and `kernels` (the vectorised far loop).
 
+mod class_table;
 mod classify;
 mod execute;
 mod kernels;
 mod reuse;
 mod tables;
 
+pub use class_table::{
+    elements_within as pair_table_elements, estimated_bytes as pair_table_bytes,
+};
+pub use class_table::{ClassTable, Runs};
 pub use classify::PairClass;
 pub use kernels::far_kernel_row;
 pub use reuse::Unchanged;
@@ -80,7 +85,7 @@ pub struct AssemblyPlan {
     ladder: RuleLadder,
     self_rule: Arc<SelfRules>,
     shortfall: Arc<ShortfallLog>,
-    classes: Vec<u8>,
+    classes: ClassTable,
     tables: Vec<Option<FarTable>>,
     stats: PlanStats,
     visibility: VisibilityAnalysis,
@@ -256,15 +261,15 @@ impl AssemblyPlan {
         &self.ladder
     }
 
-    /// Class codes ([`PairClass::code`]), `n × n`, row-major by (element of
-    /// the collocation block, element).
-    pub fn classes(&self) -> &[u8] {
+    /// Class codes ([`PairClass::code`]) by (element of the collocation
+    /// block, element), stored as runs.
+    pub fn classes(&self) -> &ClassTable {
         &self.classes
     }
 
     /// The class of the pair (row block of element `kp`, element `k`).
     pub fn class(&self, kp: usize, k: usize) -> PairClass {
-        PairClass::from_code(self.classes[kp * self.disc.mesh().len() + k])
+        PairClass::from_code(self.classes.get(kp, k))
     }
 
     /// The far table of degree `d`, when some pair uses it.
@@ -292,7 +297,7 @@ impl AssemblyPlan {
             .sum();
         let partial: usize = self.partial.iter().map(|r| r.heap_bytes()).sum::<usize>()
             + self.partial.capacity() * std::mem::size_of::<PartialRow>();
-        (self.classes.capacity() + tables + partial) as u64
+        (self.classes.heap_bytes() + tables + partial) as u64
     }
 
     /// Pair statistics, with the integrals filled so far that fell short of
@@ -339,7 +344,7 @@ fn classify_all(
     occluders: Option<&Occluders>,
     progress: &Option<ProgressHandle>,
     prev: Option<(&AssemblyPlan, &Unchanged)>,
-) -> (Vec<u8>, Vec<PartialRow>) {
+) -> (ClassTable, Vec<PartialRow>) {
     let mesh = disc.mesh();
     let n = mesh.len();
     let f = rows.nodes_per_element();
@@ -350,13 +355,13 @@ fn classify_all(
         Some(_) => RefinementTree::new(mesh),
         None => RefinementTree::default(),
     };
-    let rows: Vec<(Vec<u8>, PartialRow)> = (0..n)
+    let rows: Vec<(class_table::Row, PartialRow)> = (0..n)
         .into_par_iter()
         .map(|kp| {
             // A cancelled solve classifies nothing more (all culled): the
             // pipeline returns `Error::Cancelled` once the plan is built.
             if progress.as_ref().is_some_and(|p| p.cancelled()) {
-                return (vec![0u8; n], PartialRow::default());
+                return (ClassTable::encode(n, &vec![0u8; n]), PartialRow::default());
             }
             let block = &pts[kp * f..(kp + 1) * f];
             // The previous plan's row of this element, when it is unchanged.
@@ -364,8 +369,7 @@ fn classify_all(
             let reused = |k: usize| old.is_some_and(|(_, u, _)| u.old(k).is_some());
             let mut row: Vec<u8> = match old {
                 Some((p, u, op)) => {
-                    let n_old = u.old_len();
-                    let old_row = &p.classes[op * n_old..(op + 1) * n_old];
+                    let old_row = p.classes.row(op, 0..u.old_len());
                     (0..n)
                         .map(|k| match u.old(k) {
                             Some(ok) => old_row[ok],
@@ -399,40 +403,42 @@ fn classify_all(
             if let Some(p) = progress {
                 p.advance(1);
             }
-            (row, partial)
+            (ClassTable::encode(n, &row), partial)
         })
         .collect();
-    let mut classes = Vec::with_capacity(n * n);
+    let mut classes = Vec::with_capacity(n);
     let mut partial = Vec::with_capacity(if occluders.is_some() { n } else { 0 });
     for (row, p) in rows {
-        classes.extend_from_slice(&row);
+        classes.push(row);
         if occluders.is_some() {
             partial.push(p);
         }
     }
-    (classes, partial)
+    (ClassTable::from_encoded(n, classes), partial)
 }
 
 /// Pair statistics and the far-rule degrees in use.
 fn count(
-    classes: &[u8],
+    classes: &ClassTable,
     f: usize,
     ladder: &RuleLadder,
 ) -> (PlanStats, [bool; MAX_RULE_DEGREE + 1]) {
     let mut used = [false; MAX_RULE_DEGREE + 1];
     let mut stats = PlanStats::default();
     let f64_ = f as u64;
-    for &c in classes {
+    let runs = (0..classes.len()).flat_map(|kp| classes.runs(kp, 0..classes.width()));
+    for (run, c) in runs {
+        let pairs = f64_ * run.len() as u64;
         match PairClass::from_code(c) {
-            PairClass::Culled => stats.pairs_culled += f64_,
-            PairClass::Near => stats.pairs_near += f64_,
-            PairClass::OnElement => stats.pairs_self += f64_,
-            PairClass::Partial => stats.pairs_partial += f64_,
+            PairClass::Culled => stats.pairs_culled += pairs,
+            PairClass::Near => stats.pairs_near += pairs,
+            PairClass::OnElement => stats.pairs_self += pairs,
+            PairClass::Partial => stats.pairs_partial += pairs,
             PairClass::Far(d) => {
                 let d = d as usize;
                 used[d] = true;
-                stats.pairs_far += f64_;
-                stats.far_kernel_evals += (f * ladder.rule(d).len()) as u64;
+                stats.pairs_far += pairs;
+                stats.far_kernel_evals += (f * ladder.rule(d).len()) as u64 * run.len() as u64;
             }
         }
     }

@@ -39,14 +39,14 @@ pub(super) fn budget(
     };
     // Where the pipeline may compress (GMRES, not --operator dense), a step
     // whose dense matrix does not fit is solved compressed; the plan's pair
-    // table (a byte per element pair) is what is known to be needed, and
+    // table (as expected: pair_table_bytes) is what is known to be needed, and
     // the step's own check after the build ends the loop when the
     // compressed operator leaves too little.
     let may_compress = cfg.solver == crate::run::SolverKind::Gmres
         && cfg.operator != crate::run::OperatorChoice::Dense;
     let fits_memory = |n: u64| {
         if may_compress {
-            let pairs = (n as f64 / f as f64).powi(2);
+            let pairs = crate::assembly::pair_table_bytes(n as f64 / f as f64);
             return !cfg.check_memory
                 || available.is_none_or(|a| pairs <= STEP_MEMORY_FRACTION * a as f64);
         }
