@@ -8,6 +8,25 @@ use crate::setup::Setup;
 use radcol_core::error::{Error as CoreError, InputError};
 use radcol_core::run::mesh_size;
 
+/// The t in (0, 1] where an operator of `operator` bytes growing like N and
+/// a pair table of `pair_table` bytes on `elements` elements growing as
+/// [`radcol_core::assembly::pair_table_bytes`], both at t times the size,
+/// fill `bytes` (by bisection: both grow with t).
+fn shrink_to_fit(operator: f64, pair_table: f64, elements: f64, bytes: f64) -> f64 {
+    let b = radcol_core::assembly::pair_table_bytes;
+    let table = |t: f64| pair_table * b(t * elements) / b(elements).max(f64::MIN_POSITIVE);
+    let (mut lo, mut hi) = (0.0, 1.0);
+    for _ in 0..200 {
+        let t = 0.5 * (lo + hi);
+        if operator * t + table(t) > bytes {
+            hi = t;
+        } else {
+            lo = t;
+        }
+    }
+    lo
+}
+
 /// `err` with the CLI's flags named; for a refusal for size, with the
 /// refinement that fits.
 pub fn sized(err: CoreError, s: &Setup) -> anyhow::Error {
@@ -42,23 +61,10 @@ pub fn sized(err: CoreError, s: &Setup) -> anyhow::Error {
             available,
             ..
         }) => {
-            let a = 0.9 * *available as f64;
             let per_element = radcol_core::nodes::nodes_per_element(s.cfg.degree) as f64;
             let elements = *unknowns as f64 / per_element;
-            let table = |t: f64| {
-                let b = radcol_core::assembly::pair_table_bytes;
-                pair_table * b(t * elements) / b(elements).max(f64::MIN_POSITIVE)
-            };
-            let (mut lo, mut hi) = (0.0, 1.0);
-            for _ in 0..200 {
-                let t = 0.5 * (lo + hi);
-                if operator * t + table(t) > a {
-                    hi = t;
-                } else {
-                    lo = t;
-                }
-            }
-            *unknowns as f64 * lo
+            let t = shrink_to_fit(*operator, *pair_table, elements, 0.9 * *available as f64);
+            *unknowns as f64 * t
         }
         _ => return with_flags(err),
     };
