@@ -67,14 +67,9 @@ pub(super) fn far_points<S: GpuScalar>(rules: &Rules<'_>, k0: usize, nk: usize) 
     out.par_chunks_exact_mut(nk)
         .zip(slot_rule.par_iter())
         .for_each(|(slot, &(t, q))| {
-            let nq = t.nq;
             for (e, rec) in slot.iter_mut().enumerate() {
-                let i = (k0 + e) * nq + q;
-                *rec = S::point(
-                    [t.px[i], t.py[i], t.pz[i]],
-                    [t.nx[i], t.ny[i], t.nz[i]],
-                    t.wj[i],
-                );
+                let (p, n, wj) = t.point(k0 + e, q);
+                *rec = S::point(p, n, wj);
             }
         });
     out
@@ -174,10 +169,8 @@ mod tests {
             for q in [0, t.nq - 1] {
                 for e in [0, nk - 1] {
                     let rec = out[(offset + q) * nk + e];
-                    let i = (k0 + e) * t.nq + q;
-                    assert_eq!(rec.p, [t.px[i], t.py[i], t.pz[i]]);
-                    assert_eq!(rec.n, [t.nx[i], t.ny[i], t.nz[i]]);
-                    assert_eq!(rec.wj, t.wj[i]);
+                    let (p, n, wj) = t.point(k0 + e, q);
+                    assert_eq!((rec.p, rec.n, rec.wj), (p, n, wj));
                 }
             }
         }

@@ -1,7 +1,7 @@
 //! Executing the plan: filling one row block of the geometric matrix, and
 //! integrating a partly visible pair over its clipped visible region.
 
-use super::kernels::{contract, far_kernel_row, RUN_CHUNK};
+use super::kernels::{contract, far_kernel_flat, far_kernel_row, RUN_CHUNK};
 use super::{AssemblyPlan, FillMode, PairClass};
 use crate::assembly::integrate::{ElementIntegrator, FieldPoint, Integrand};
 use crate::assembly::VisibilityMode;
@@ -296,22 +296,21 @@ impl BlockFill<'_, '_> {
             .as_ref()
             .expect("plan builds every table it uses");
         let nq = t.nq;
-        let span = run.start * nq..run.end * nq;
-        let len = span.len();
+        let len = run.len() * nq;
         let g = &mut g[..len];
+        let (flat, s) = (t.flat(), t.span(run.clone()));
         for (row, p) in self.pts.iter().enumerate() {
-            far_kernel_row(
-                p.position,
-                p.normal,
-                &t.px[span.clone()],
-                &t.py[span.clone()],
-                &t.pz[span.clone()],
-                &t.nx[span.clone()],
-                &t.ny[span.clone()],
-                &t.nz[span.clone()],
-                &t.wj[span.clone()],
-                g,
-            );
+            match (&s, flat) {
+                (Some(s), _) => far_kernel_row(
+                    p.position, p.normal, s.px, s.py, s.pz, s.nx, s.ny, s.nz, s.wj, g,
+                ),
+                (None, Some((elements, rule))) => {
+                    for (e, gk) in elements[run.clone()].iter().zip(g.chunks_exact_mut(nq)) {
+                        far_kernel_flat(p.position, p.normal, e, rule, gk);
+                    }
+                }
+                (None, None) => unreachable!("a table is flat or holds its points"),
+            }
             let (a, b) = ((run.start - self.first) * f, (run.end - self.first) * f);
             let out = &mut block[row * ncols + a..row * ncols + b];
             contract(g, &t.basis_t, nq, f, out);

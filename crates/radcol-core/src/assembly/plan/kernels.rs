@@ -85,3 +85,32 @@ pub fn far_kernel_row(
         g[q] = a * b / (r2 * r2) * wj[q];
     }
 }
+
+/// [`far_kernel_row`] against one flat element (`e`'s map, rule points
+/// `s`, `t` with weights / π `w`), from the element's geometry alone: on a
+/// flat element the cosine at Q is the constant (P − o)·n_Q / |P − Q|,
+/// the cosine at P and |P − Q|² are a linear and a quadratic polynomial
+/// in (s, t), so a point costs a few multiply-adds and no table is read.
+#[inline]
+pub(super) fn far_kernel_flat(
+    p: glam::DVec3,
+    n_p: glam::DVec3,
+    e: &super::tables::FlatElement,
+    [s, t, w]: [&[f64]; 3],
+    g: &mut [f64],
+) {
+    let nq = g.len();
+    let (s, t, w) = (&s[..nq], &t[..nq], &w[..nq]);
+    let d0 = e.origin - p;
+    // a = d·n_P, b = −d·n_Q, r² = |d|², d = d0 + s e1 + t e2.
+    let (a0, a1, a2) = (d0.dot(n_p), e.e1.dot(n_p), e.e2.dot(n_p));
+    let b = (-d0.dot(e.normal)).max(0.0) * e.jacobian;
+    let (c0, c1, c2) = (d0.dot(d0), 2.0 * d0.dot(e.e1), 2.0 * d0.dot(e.e2));
+    let (c3, c4, c5) = (e.e1.dot(e.e1), 2.0 * e.e1.dot(e.e2), e.e2.dot(e.e2));
+    for q in 0..nq {
+        let (sq, tq) = (s[q], t[q]);
+        let a = (a0 + sq * a1 + tq * a2).max(0.0);
+        let r2 = c0 + sq * (c1 + sq * c3 + tq * c4) + tq * (c2 + tq * c5);
+        g[q] = a * b / (r2 * r2) * w[q];
+    }
+}

@@ -26,7 +26,7 @@ pub use class_table::{ClassTable, Runs};
 pub use classify::PairClass;
 pub use kernels::far_kernel_row;
 pub use reuse::Unchanged;
-pub use tables::FarTable;
+pub use tables::{FarSpan, FarTable};
 
 use super::integrate::{ElementIntegrator, QuadratureOptions, SelfRules, Shortfall, ShortfallLog};
 use crate::discretization::Discretization;
@@ -209,8 +209,9 @@ impl AssemblyPlan {
         let ladder = RuleLadder::new();
         let f_rows = rows.as_ref().unwrap_or(&disc).nodes_per_element();
         let (stats, used) = count(&classes, f_rows, &ladder);
+        let flat = tables::flat_elements(disc.mesh());
         let tables = (0..=MAX_RULE_DEGREE)
-            .map(|d| used[d].then(|| tables::build_table(&disc, &ladder, d)))
+            .map(|d| used[d].then(|| tables::build_table(&disc, &ladder, d, flat.as_ref())))
             .collect();
         Self {
             self_rule: Arc::new(SelfRules::new(opts.self_order)),
@@ -282,19 +283,9 @@ impl AssemblyPlan {
     /// dominate in occluding scenes: Cornell, r = 1, 8 592 unknowns: about
     /// 0.2 GB against 0.59 GB of matrix).
     pub fn heap_bytes(&self) -> u64 {
-        let tables: usize = self
-            .tables
-            .iter()
-            .flatten()
-            .map(|t| {
-                8 * [
-                    &t.basis, &t.basis_t, &t.px, &t.py, &t.pz, &t.nx, &t.ny, &t.nz, &t.wj,
-                ]
-                .iter()
-                .map(|v| v.capacity())
-                .sum::<usize>()
-            })
-            .sum();
+        let tables: usize = self.tables.iter().flatten().map(|t| t.heap_bytes()).sum();
+        let shared = self.tables.iter().flatten().map(|t| t.shared_bytes()).max();
+        let tables = tables + shared.unwrap_or(0);
         let partial: usize = self.partial.iter().map(|r| r.heap_bytes()).sum::<usize>()
             + self.partial.capacity() * std::mem::size_of::<PartialRow>();
         (self.classes.heap_bytes() + tables + partial) as u64
