@@ -26,6 +26,25 @@ pub struct LowRank {
 }
 
 impl LowRank {
+    /// This block of the rows `at_rows` (of `m`) and columns `at_cols`
+    /// (of `n`) of a larger one that is zero elsewhere.
+    pub fn padded(&self, m: usize, at_rows: &[usize], n: usize, at_cols: &[usize]) -> Self {
+        if (m, n) == (self.m, self.n) {
+            return self.clone();
+        }
+        let k = self.rank();
+        let (mut u, mut v) = (vec![0.0; k * m], vec![0.0; k * n]);
+        for l in 0..k {
+            for (a, &i) in at_rows.iter().enumerate() {
+                u[l * m + i] = self.u[l * self.m + a];
+            }
+            for (b, &j) in at_cols.iter().enumerate() {
+                v[l * n + j] = self.v[l * self.n + b];
+            }
+        }
+        Self { m, n, u, v }
+    }
+
     /// The rank k.
     pub fn rank(&self) -> usize {
         self.u.len().checked_div(self.m).unwrap_or(0)

@@ -47,6 +47,17 @@ pub trait Structure: Sync {
     fn smooth(&self, _rows: &[usize], _row_box: &Aabb, _cols: &[usize], _col_box: &Aabb) -> bool {
         true
     }
+
+    /// Of a smooth block, the rows and the columns known to be zero (for
+    /// radiosity: points and elements facing away from, coplanar with or
+    /// hidden from the whole other side), which compression leaves out:
+    /// adaptive cross approximation started in a zero part stops before it
+    /// has seen the rest (the box room: a product error of 5e-5 at a
+    /// tolerance of 1e-8 with blocks mixing a floor's columns and a wall's).
+    /// The default: none.
+    fn zero_lines(&self, rows: &[usize], cols: &[usize]) -> (Vec<bool>, Vec<bool>) {
+        (vec![false; rows.len()], vec![false; cols.len()])
+    }
 }
 
 /// Where a hierarchical matrix's entries come from.
@@ -366,17 +377,26 @@ fn leaf(
     let data = if entries.is_zero(rows, &rc.bbox, cols, &cc.bbox) {
         LeafData::Zero
     } else if admissible {
-        let (m, n) = (rows.len(), cols.len());
-
+        let (zero_rows, zero_cols) = entries.zero_lines(rows, cols);
+        let live = |idx: &[usize], zero: &[bool]| -> Vec<usize> {
+            (0..idx.len()).filter(|&a| !zero[a]).collect()
+        };
+        let (lr, lc) = (live(rows, &zero_rows), live(cols, &zero_cols));
+        let (sub_rows, sub_cols): (Vec<usize>, Vec<usize>) = (
+            lr.iter().map(|&a| rows[a]).collect(),
+            lc.iter().map(|&b| cols[b]).collect(),
+        );
         let cross = aca_plus(
-            m,
-            n,
+            sub_rows.len(),
+            sub_cols.len(),
             tol,
-            &mut |i, out| entries.block(&rows[i..i + 1], cols, out),
-            &mut |j, out| entries.block(rows, &cols[j..j + 1], out),
+            &mut |i, out| entries.block(&sub_rows[i..i + 1], &sub_cols, out),
+            &mut |j, out| entries.block(&sub_rows, &sub_cols[j..j + 1], out),
         );
         match cross {
-            Cross::LowRank(lr) => LeafData::LowRank(recompress(&lr, tol)),
+            Cross::LowRank(l) => {
+                LeafData::LowRank(recompress(&l, tol).padded(rows.len(), &lr, cols.len(), &lc))
+            }
             Cross::Dense => dense(rows, cols, entries),
         }
     } else {

@@ -107,36 +107,42 @@ impl Structure for PlanEntries<'_> {
         self.all_pairs(rows, cols, |c| c == PairClass::Culled)
     }
 
-    /// Smooth when its planes allow ([`planes_clear`]) and no element pair
-    /// is partly visible, nor hidden next to a visible one: G jumps to 0
-    /// along element edges where a shadow boundary follows them (no pair is
-    /// partly visible there), which ACA's samples miss at any tolerance
-    /// (on the Cornell box, ∫u off by 7.5e-6 at tolerances 1e-6 to 1e-11
-    /// before this test).
+    /// Smooth when its planes allow ([`planes_clear`]), no element pair is
+    /// partly visible, and its culled pairs (facing away, coplanar or
+    /// hidden) fill whole rows and columns of elements ([`Self::cross`]),
+    /// which compression leaves out ([`Structure::zero_lines`]). Culled
+    /// pairs elsewhere are a shadow boundary along element edges, where G
+    /// jumps to 0, which ACA's samples miss at any tolerance (on the
+    /// Cornell box, ∫u off by 7.5e-6 at tolerances 1e-6 to 1e-11 before
+    /// this test). Once the planes are clear, pairs culled by the planes
+    /// alone always fill whole rows and columns: the rows lie on one side
+    /// of each column element's plane, the columns on one side of each
+    /// row point's.
     fn smooth(&self, rows: &[usize], row_box: &Aabb, cols: &[usize], col_box: &Aabb) -> bool {
         let disc = self.plan.discretization();
-        let (mut hidden, mut seen) = (false, false);
-        planes_clear(disc, rows, row_box, cols, col_box)
-            && self.all_pairs(rows, cols, |c| {
-                match c {
-                    PairClass::Partial => return false,
-                    PairClass::Culled => hidden = true,
-                    _ => seen = true,
-                }
-                !(hidden && seen)
-            })
+        planes_clear(disc, rows, row_box, cols, col_box) && self.cross(rows, cols).is_some()
+    }
+
+    fn zero_lines(&self, rows: &[usize], cols: &[usize]) -> (Vec<bool>, Vec<bool>) {
+        let f_rows = self.plan.rows().nodes_per_element();
+        let f = self.plan.discretization().nodes_per_element();
+        match self.cross(rows, cols) {
+            Some((zr, zc)) => (
+                rows.iter()
+                    .map(|&i| zr.binary_search(&(i / f_rows)).is_ok())
+                    .collect(),
+                cols.iter()
+                    .map(|&j| zc.binary_search(&(j / f)).is_ok())
+                    .collect(),
+            ),
+            None => (vec![false; rows.len()], vec![false; cols.len()]),
+        }
     }
 }
 
 impl PlanEntries<'_> {
-    /// True when every element pair of the block has a class for which `ok`
-    /// holds (a byte lookup per pair: no kernel call).
-    fn all_pairs(
-        &self,
-        rows: &[usize],
-        cols: &[usize],
-        mut ok: impl FnMut(PairClass) -> bool,
-    ) -> bool {
+    /// The block's distinct row and column elements, sorted.
+    fn elements(&self, rows: &[usize], cols: &[usize]) -> (Vec<usize>, Vec<usize>) {
         let f_rows = self.plan.rows().nodes_per_element();
         let f = self.plan.discretization().nodes_per_element();
         let mut row_elems: Vec<usize> = rows.iter().map(|&i| i / f_rows).collect();
@@ -145,6 +151,69 @@ impl PlanEntries<'_> {
         let mut col_elems: Vec<usize> = cols.iter().map(|&j| j / f).collect();
         col_elems.sort_unstable();
         col_elems.dedup();
+        (row_elems, col_elems)
+    }
+
+    /// With no partly visible pair and the culled pairs filling whole rows
+    /// and columns of elements: those row and column elements (sorted).
+    fn cross(&self, rows: &[usize], cols: &[usize]) -> Option<(Vec<usize>, Vec<usize>)> {
+        let (row_elems, col_elems) = self.elements(rows, cols);
+        // Culled pairs per column element; rows wholly culled.
+        let mut culled_in_col = vec![0usize; col_elems.len()];
+        let mut zero_rows = Vec::new();
+        let mut some_culled = false;
+        let mut partial = false;
+        let classes = self.plan.classes();
+        let (first, last) = (*col_elems.first()?, *col_elems.last()?);
+        for &kp in &row_elems {
+            let (mut c, mut all) = (0, true);
+            let mut cols = col_elems.iter().enumerate().peekable();
+            for (run, code) in classes.runs(kp, first..last + 1) {
+                while let Some((b, _)) = cols.next_if(|&(_, &k)| k < run.end) {
+                    match PairClass::from_code(code) {
+                        PairClass::Partial => partial = true,
+                        PairClass::Culled => {
+                            culled_in_col[b] += 1;
+                            c += 1;
+                        }
+                        _ => all = false,
+                    }
+                }
+            }
+            if partial {
+                return None;
+            }
+            some_culled |= c > 0;
+            if all {
+                zero_rows.push(kp);
+            }
+        }
+        let zero_cols: Vec<usize> = col_elems
+            .iter()
+            .zip(&culled_in_col)
+            .filter(|&(_, &c)| c == row_elems.len())
+            .map(|(&k, _)| k)
+            .collect();
+        if !some_culled {
+            return Some((zero_rows, zero_cols));
+        }
+        // Every culled pair lies in a zero row or a zero column: a column's
+        // culled pairs outside the zero rows number none unless it is zero.
+        let crossing = culled_in_col
+            .iter()
+            .all(|&c| c == row_elems.len() || c == zero_rows.len());
+        crossing.then_some((zero_rows, zero_cols))
+    }
+
+    /// True when every element pair of the block has a class for which `ok`
+    /// holds (a byte lookup per pair: no kernel call).
+    fn all_pairs(
+        &self,
+        rows: &[usize],
+        cols: &[usize],
+        mut ok: impl FnMut(PairClass) -> bool,
+    ) -> bool {
+        let (row_elems, col_elems) = self.elements(rows, cols);
         let (Some(&first), Some(&last)) = (col_elems.first(), col_elems.last()) else {
             return true;
         };
@@ -193,10 +262,23 @@ fn boxes(disc: &Discretization) -> (Vec<Aabb>, Vec<Aabb>) {
     let f = disc.nodes_per_element();
     let cols = (0..mesh.len())
         .flat_map(|k| {
-            let (c, r) = mesh.bounding_ball(k);
-            let b = Aabb {
-                lo: c - DVec3::splat(r),
-                hi: c + DVec3::splat(r),
+            // A flat element's own corners: the cube of its bounding ball
+            // reaches through the planes of the faces it meets, so a wall's
+            // elements along the floor cut the floor's plane, and every
+            // block of floor rows against them was split to its leaves
+            // (the room's near field grew like N^1.4).
+            let b = if mesh.is_flat(k) {
+                let v = mesh.vertices(k);
+                Aabb {
+                    lo: v[0].min(v[1]).min(v[2]),
+                    hi: v[0].max(v[1]).max(v[2]),
+                }
+            } else {
+                let (c, r) = mesh.bounding_ball(k);
+                Aabb {
+                    lo: c - DVec3::splat(r),
+                    hi: c + DVec3::splat(r),
+                }
             };
             std::iter::repeat_n(b, f)
         })
@@ -207,8 +289,11 @@ fn boxes(disc: &Discretization) -> (Vec<Aabb>, Vec<Aabb>) {
 /// Whether the box lies wholly on one side of the plane through `p` with
 /// normal `n`.
 fn one_side(p: DVec3, n: DVec3, b: &Aabb) -> bool {
+    // A box that touches the plane (a wall's elements on the floor's
+    // plane) lies on one side: rounding of its corners is not a crossing.
+    let eps = COPLANAR * (p.abs().max_element() + b.lo.abs().max(b.hi.abs()).max_element());
     let s = b.corners().map(|c| n.dot(c - p));
-    s.iter().all(|&x| x >= 0.0) || s.iter().all(|&x| x <= 0.0)
+    s.iter().all(|&x| x >= -eps) || s.iter().all(|&x| x <= eps)
 }
 
 /// The distinct elements of columns `cols` (basis functions, f per element,
