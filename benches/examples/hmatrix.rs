@@ -1,12 +1,14 @@
 //! The hierarchical matrix against the dense one on the Cornell box refined
 //! by --max-edge (r = 1, occluded: partly visible blocks are subdivided to
-//! dense leaves, culled blocks are zero): unknowns, build seconds, numbers
-//! stored, product seconds, and the product's error against the dense
-//! matrix where that fits (`DENSE_CAP` unknowns); then the exponents of
-//! storage and product time against N fitted over the run. Wall-clock
+//! dense leaves, culled blocks are zero), or on the empty room by level:
+//! unknowns, build seconds, numbers stored, product seconds, and the
+//! product's error against the dense matrix where that fits (`DENSE_CAP`
+//! unknowns); then the exponents of storage and product time against N
+//! fitted over the run. Wall-clock
 //! figures of one run: compare them as ratios within it.
 //!
 //!     cargo run --release -p radcol-benches --example hmatrix [-- TOL [EDGE ...]]
+//!     cargo run --release -p radcol-benches --example hmatrix -- room TOL [LEVEL ...]
 //!
 //! The entries come from the assembly plan, which classifies all n² element
 //! pairs (its table keeps them as runs of equal classes).
@@ -36,22 +38,37 @@ fn fit(points: &[(f64, f64)]) -> f64 {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    // `room TOL LEVEL ...`: the empty room refined uniformly instead.
+    let room = args.first().is_some_and(|a| a == "room");
+    if room {
+        args.remove(0);
+    }
     let tol: f64 = args.first().map_or(1e-6, |a| a.parse().expect("TOL"));
-    let edges: Vec<f64> = if args.len() > 1 {
-        args[1..].iter().map(|a| a.parse().expect("EDGE")).collect()
+    let sizes: Vec<f64> = if args.len() > 1 {
+        args[1..]
+            .iter()
+            .map(|a| a.parse().expect("EDGE or LEVEL"))
+            .collect()
+    } else if room {
+        vec![3.0, 4.0]
     } else {
         vec![120.0, 85.0, 60.0, 42.0]
     };
-    let surface = builtin("cornell").unwrap().unwrap().surface.clone();
+    let name = if room { "room" } else { "cornell" };
+    let surface = builtin(name).unwrap().unwrap().surface.clone();
     let vis = visibility::analyze(&surface);
-    println!("Cornell box, r = 1, tol {tol:e}, eta 1, leaf 32");
+    println!("{name}, r = 1, tol {tol:e}, eta 1, leaf 32");
     println!(
         "     N   build s   stored   of dense   matvec s   dense asm s   dense matvec s   error"
     );
     let (mut storage, mut times) = (Vec::new(), Vec::new());
-    for h in edges {
-        let mesh = Arc::new(Mesh::with_max_edge(surface.clone(), 0, h));
+    for h in sizes {
+        let mesh = Arc::new(if room {
+            Mesh::new(surface.clone(), h as u32)
+        } else {
+            Mesh::with_max_edge(surface.clone(), 0, h)
+        });
         let disc = Arc::new(Discretization::new(
             mesh,
             NodeSet::new(1, 1.0 / 6.0).unwrap(),
