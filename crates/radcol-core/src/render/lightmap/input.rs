@@ -62,9 +62,7 @@ impl Atlas {
                     ));
                 }
                 let v = tri.map(|x| patch.map.map(x));
-                let a = 0.5
-                    * ((uv[1][0] - uv[0][0]) * (uv[2][1] - uv[0][1])
-                        - (uv[2][0] - uv[0][0]) * (uv[1][1] - uv[0][1]));
+                let a = coordinate_area(uv);
                 if plane_of(patch, tri, scale)?.is_some() && a == 0.0 {
                     return bad(format!(
                         "{}: its texture coordinates have no area, so it would get no texel; \
@@ -73,7 +71,7 @@ impl Atlas {
                     ));
                 }
                 uv_area += a.abs();
-                area += 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
+                area += space_area(&v);
                 chart.triangles.push(t);
                 corners.push((v, *uv));
             }
@@ -120,12 +118,8 @@ impl Atlas {
         let (mut uv_area, mut area) = (0.0, 0.0);
         for (patch, uvs) in surface.patches.iter().zip(uvs) {
             for (tri, uv) in patch.triangles.iter().zip(uvs) {
-                let v = tri.map(|x| patch.map.map(x));
-                area += 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
-                uv_area += 0.5
-                    * ((uv[1][0] - uv[0][0]) * (uv[2][1] - uv[0][1])
-                        - (uv[2][0] - uv[0][0]) * (uv[1][1] - uv[0][1]))
-                        .abs();
+                area += space_area(&tri.map(|x| patch.map.map(x)));
+                uv_area += coordinate_area(uv).abs();
             }
         }
         let side = texels_per_unit * (area / uv_area).sqrt();
@@ -144,6 +138,17 @@ impl Atlas {
         }
         Self::from_uvs(surface, uvs, (side.ceil() as u32).max(16))
     }
+}
+
+/// The signed area of a triangle in texture coordinates.
+fn coordinate_area(uv: &[[f64; 2]; 3]) -> f64 {
+    0.5 * ((uv[1][0] - uv[0][0]) * (uv[2][1] - uv[0][1])
+        - (uv[2][0] - uv[0][0]) * (uv[1][1] - uv[0][1]))
+}
+
+/// The area of a triangle in space.
+fn space_area(v: &[DVec3; 3]) -> f64 {
+    0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length()
 }
 
 /// The texture coordinates at `x` of the flat triangle `v` whose corners
