@@ -11,6 +11,8 @@
 //!   visible rectangle (Hottel's corner formula with superposition), and is
 //!   half the unblocked value under the blocker's edge.
 //! * The decision whether a scene needs visibility at all.
+//! * Pairs the plan culls although they face each other: every ray between
+//!   them (row points against a grid of the column element) is blocked.
 
 use glam::DVec3;
 use radcol_core::assembly::{AssemblyBackend, CpuBackend, VisibilityMode};
@@ -368,4 +370,74 @@ fn unoccluded_scenes_are_recognised() {
     let m = Material::diffuse("m", [0.5; 3]);
     let with_cube = room_with_cube(m.clone(), m);
     assert!(analyze(&with_cube.surface).needed);
+}
+
+/// The plan culls element pairs hidden from every row point (their clipped
+/// visible region is empty) instead of clipping them at every fill. Checked
+/// by rays against every occluder of the scene, not the pair's candidates:
+/// for each culled pair, each row point P and grid point Q that face each
+/// other (where G(P, Q) > 0 without occlusion), some occluder crosses PQ.
+#[test]
+fn pairs_that_face_each_other_are_culled_only_when_every_ray_is_blocked() {
+    use radcol_core::assembly::plan::{AssemblyPlan, PairClass};
+    use radcol_core::assembly::QuadratureOptions;
+    use radcol_core::discretization::Discretization;
+    use radcol_core::mesh::Mesh;
+    use radcol_core::nodes::NodeSet;
+    use radcol_core::visibility::clip::blocks;
+    use std::sync::Arc;
+
+    let m = Material::diffuse("m", [0.5; 3]);
+    let scene = room_with_cube(m.clone(), m);
+    let mesh = Arc::new(Mesh::new(scene.surface.clone(), 2));
+    let disc = Arc::new(Discretization::new(mesh, NodeSet::new(1, 0.2).unwrap()));
+    let plan = AssemblyPlan::new(
+        disc.clone(),
+        QuadratureOptions::default(),
+        &analyze(&scene.surface),
+    );
+    let occ = plan.occluders().expect("the cube occludes");
+    let (n, f) = (disc.mesh().len(), disc.nodes_per_element());
+    let grid: Vec<(f64, f64)> = (0..=4)
+        .flat_map(|i| (0..=4 - i).map(move |j| (i as f64 / 4.0, j as f64 / 4.0)))
+        .map(|(s, t)| (0.05 + 0.9 * s, 0.05 + 0.9 * t))
+        .filter(|(s, t)| s + t <= 0.95)
+        .collect();
+    let (mut hidden, mut partial) = (0, 0);
+    for kp in 0..n {
+        let rows = &disc.points()[kp * f..(kp + 1) * f];
+        for k in 0..n {
+            match plan.class(kp, k) {
+                PairClass::Partial => partial += 1,
+                PairClass::Culled if k != kp => {
+                    let mut facing = false;
+                    for p in rows {
+                        for &(s, t) in &grid {
+                            let q = disc.mesh().point(k, s, t);
+                            let d = q.position - p.position;
+                            if d.dot(p.normal) > 1e-9 && -d.dot(q.normal) > 1e-9 {
+                                facing = true;
+                                assert!(
+                                    (0..occ.len() as u32).any(|i| blocks(
+                                        p.position,
+                                        q.position,
+                                        occ.get(i)
+                                    )),
+                                    "pair ({kp}, {k}) culled, but {:?} sees {:?}",
+                                    p.position,
+                                    q.position
+                                );
+                            }
+                        }
+                    }
+                    hidden += facing as usize;
+                }
+                _ => {}
+            }
+        }
+    }
+    // Floor against ceiling, wall against opposite wall behind the cube:
+    // many pairs face each other and are wholly hidden.
+    println!("{hidden} hidden pairs culled, {partial} partly visible");
+    assert!(hidden > n, "{hidden} hidden pairs culled of {n}²");
 }

@@ -184,7 +184,7 @@ pub enum InputError {
         available: u64,
     },
     /// The plan's table of element pair classes would not fit in memory.
-    #[error("{} need a table of their element pairs' classes of {} (kept by the assembly plan as runs of equal classes, about 40 n^1.5 bytes for n elements), but only {} of memory is available; use a coarser mesh", elements_text(*elements), gib(*bytes), gib(*available as f64))]
+    #[error("{} need a table of their element pairs' classes of {} (kept by the assembly plan as runs of equal classes, about 44 n^1.5 bytes for n elements), but only {} of memory is available; use a coarser mesh", elements_text(*elements), gib(*bytes), gib(*available as f64))]
     PairTableTooLarge {
         /// Elements n.
         elements: u64,

@@ -2,7 +2,7 @@
 //! refinement tree of every base triangle, walked per row block so that a
 //! node's candidate occluders bound its descendants'.
 
-use super::Occluders;
+use super::{clip, Occluders};
 use crate::geometry::barycentric_st;
 use crate::mesh::{Element, Mesh};
 use glam::DVec3;
@@ -78,29 +78,45 @@ impl PartialRow {
     }
 }
 
-/// The partly visible elements seen from flat element `a` (the row block's):
-/// every element `k` with `live[k]` (not culled, not the block's own, flat)
-/// that some occluder may hide from `a`, or that straddles `a`'s plane, with
-/// its candidate occluders. `flat_geom[k]` is element k's plane.
+/// What one row block (flat element A) sees of the other elements.
+#[derive(Debug, Default)]
+pub(crate) struct Seen {
+    /// The partly visible pairs, with their candidate occluders.
+    pub(crate) partial: PartialRow,
+    /// Elements hidden from every row point (ascending): their entries are
+    /// zero, and the plan culls them.
+    pub(crate) hidden: Vec<u32>,
+}
+
+/// What flat element `a` (the row block's, with row points `rows`:
+/// position and unit normal) sees: every element `k` with `live[k]` (not
+/// culled, not the block's own, flat) that some occluder may hide from
+/// `a`, or that straddles `a`'s plane, is partly visible with its candidate
+/// occluders, unless the occluders hide it from every row point (its
+/// clipped visible region is empty from each). `flat_geom[k]` is element
+/// k's plane.
 pub(crate) fn partial_pairs(
     occ: &Occluders,
     tree: &RefinementTree,
     a: Plane,
+    rows: &[(DVec3, DVec3)],
     flat_geom: &[Plane],
     live: &[bool],
-) -> PartialRow {
+) -> Seen {
     let walk = Walk {
         occ,
         a,
+        rows,
         tree,
         live,
         flat_geom,
     };
-    let mut partial = PartialRow::default();
+    let mut seen = Seen::default();
     for &root in &tree.roots {
-        walk.visit(root, None, &mut partial);
+        walk.visit(root, None, &mut seen);
     }
-    partial
+    seen.hidden.sort_unstable();
+    seen
 }
 
 /// True when flat element B straddles the plane of flat element A: the
@@ -219,6 +235,7 @@ fn inside(mesh: &Mesh, node: &Element, k: usize) -> bool {
 struct Walk<'a> {
     occ: &'a Occluders,
     a: Plane,
+    rows: &'a [(DVec3, DVec3)],
     tree: &'a RefinementTree,
     live: &'a [bool],
     flat_geom: &'a [Plane],
@@ -237,13 +254,26 @@ impl Walk<'_> {
         }
     }
 
-    fn mark(&self, k: usize, cands: &[u32], partial: &mut PartialRow) {
-        if straddles(self.a, self.flat_geom[k].0, self.occ.scale()) || !cands.is_empty() {
-            partial.push(k, cands);
+    /// True when the occluders `cands` hide triangle `v` from every row
+    /// point: a whole subtree of the refinement is then culled at once
+    /// (a floor's elements behind a block are mostly found so).
+    fn hidden(&self, v: &[DVec3; 3], cands: &[u32]) -> bool {
+        !cands.is_empty()
+            && self
+                .rows
+                .iter()
+                .all(|&(p, n)| clip::visible_region(p, n, v, self.occ, cands).is_empty())
+    }
+
+    fn mark(&self, k: usize, cands: &[u32], seen: &mut Seen) {
+        if self.hidden(&self.flat_geom[k].0, cands) {
+            seen.hidden.push(k as u32);
+        } else if straddles(self.a, self.flat_geom[k].0, self.occ.scale()) || !cands.is_empty() {
+            seen.partial.push(k, cands);
         }
     }
 
-    fn visit(&self, id: u32, among: Option<&[u32]>, partial: &mut PartialRow) {
+    fn visit(&self, id: u32, among: Option<&[u32]>, seen: &mut Seen) {
         let node = &self.tree.nodes[id as usize];
         if !(node.start..node.end).any(|k| self.live(k)) {
             return;
@@ -253,20 +283,20 @@ impl Walk<'_> {
             // The node is the element itself.
             let k = node.start;
             self.candidates(self.flat_geom[k], among, &mut cands);
-            self.mark(k, &cands, partial);
+            self.mark(k, &cands, seen);
             return;
         }
         self.candidates((node.vertices, node.normal), among, &mut cands);
-        if cands.is_empty() {
+        if cands.is_empty() || self.hidden(&node.vertices, &cands) {
             for k in node.start..node.end {
                 if self.live(k) {
-                    self.mark(k, &[], partial);
+                    self.mark_whole(k, &cands, seen);
                 }
             }
             return;
         }
         for &child in &node.children {
-            self.visit(child, Some(&cands), partial);
+            self.visit(child, Some(&cands), seen);
         }
         // Elements not in refinement order (not produced by radcol's meshes):
         // tested one by one against this node's candidates.
@@ -275,8 +305,18 @@ impl Walk<'_> {
             if self.live(k) {
                 one.clear();
                 self.candidates(self.flat_geom[k], Some(&cands), &mut one);
-                self.mark(k, &one, partial);
+                self.mark(k, &one, seen);
             }
+        }
+    }
+
+    /// Element `k` of a node that no occluder meets (`cands` empty) or that
+    /// `cands` hide from every row point.
+    fn mark_whole(&self, k: usize, cands: &[u32], seen: &mut Seen) {
+        if !cands.is_empty() {
+            seen.hidden.push(k as u32);
+        } else if straddles(self.a, self.flat_geom[k].0, self.occ.scale()) {
+            seen.partial.push(k, &[]);
         }
     }
 }

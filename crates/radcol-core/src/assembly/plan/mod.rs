@@ -35,6 +35,7 @@ use crate::quadrature::{RuleLadder, MAX_RULE_DEGREE};
 use crate::visibility::walk::{partial_pairs, PartialRow, RefinementTree};
 use crate::visibility::{self, Occluders, VisibilityAnalysis};
 use classify::ElementShapes;
+use glam::DVec3;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::sync::Arc;
@@ -383,7 +384,17 @@ fn classify_all(
                             && shapes.is_flat(k)
                     })
                     .collect();
-                partial = partial_pairs(occ, &tree, shapes.planes[kp], &shapes.planes, &live);
+                let at: Vec<(DVec3, DVec3)> =
+                    block.iter().map(|p| (p.position, p.normal)).collect();
+                let seen = partial_pairs(occ, &tree, shapes.planes[kp], &at, &shapes.planes, &live);
+                // Pairs hidden from every row point are culled: their
+                // entries are zero, and as partial pairs they were clipped
+                // at every fill and made every block of a shadow look rough
+                // to the compressed operator.
+                for &k in &seen.hidden {
+                    row[k as usize] = PairClass::Culled.code();
+                }
+                partial = seen.partial;
                 for &k in &partial.elements {
                     row[k as usize] = PairClass::Partial.code();
                 }
