@@ -272,6 +272,7 @@ fn study_json_has_rows_with_eoc_and_fitted_orders() {
         "an EOC from rounding errors"
     );
     assert!(v["fitted"]["nodes_max"].is_null());
+    assert_eq!(v["nodes_at_rounding"], 1, "the first level at rounding");
     // Interpolation of x*y + z by linear pieces: the global error falls like h^2.
     let g = num(&v["fitted"], "global_max");
     assert!(g > 1.0 && g < 3.0, "fitted global order {g}");
@@ -313,6 +314,24 @@ fn study_text_prints_table_and_theory() {
         "{text}"
     );
     assert!(text.contains("theory"), "{text}");
+    // 1 + z: the nodes are not exact, and nothing is said about them.
+    assert!(!text.contains("nodal errors are at rounding"), "{text}");
+}
+
+/// u = x*y + z on the sphere: E = u (∫u = 0), and the symmetric meshes'
+/// node rule gets ∫u_n = 0 exactly, so the nodes are exact from level 1 on
+/// (level 0's nodal error is above rounding at r = 1, α auto); the report
+/// says why no nodal order is printed and what shows one.
+#[test]
+fn study_says_when_the_nodes_are_exact() {
+    let out = radcol_ok(&[
+        "study", "sphere", "--degree", "1", "--levels", "0..=2", "--exact", "x*y+z",
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("nodal errors are at rounding from level 1 on") && text.contains("exp(x)"),
+        "{text}"
+    );
 }
 
 /// Without --exact a study estimates its errors: the global and L2 columns

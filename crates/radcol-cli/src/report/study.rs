@@ -153,6 +153,18 @@ pub struct StudyFooter {
     fitted: Fitted,
     theory: PredictedOrders,
     plot: Option<String>,
+    /// The first level whose nodal error is at rounding while the global
+    /// error is not (then every later level's too): no nodal order can be
+    /// measured from this exact solution on these meshes.
+    nodes_at_rounding: Option<u32>,
+}
+
+/// The first level of `rows` from which on the nodal error lies at or below
+/// the rounding floor while the global error lies above it.
+fn nodes_at_rounding(rows: &[StudyRow]) -> Option<u32> {
+    let exact = |r: &StudyRow| r.nodes_max <= r.rounding_floor && r.global_max > r.rounding_floor;
+    let tail = rows.iter().rev().take_while(|r| exact(r)).count();
+    (tail > 0).then(|| rows[rows.len() - tail].level)
 }
 
 impl StudyFooter {
@@ -162,6 +174,7 @@ impl StudyFooter {
             fitted: Fitted::of(rows),
             theory: predicted,
             plot,
+            nodes_at_rounding: nodes_at_rounding(rows),
         }
     }
 }
@@ -177,6 +190,12 @@ impl fmt::Display for StudyFooter {
             v(ft.global_max),
             v(ft.l2)
         )?;
+        if let Some(level) = self.nodes_at_rounding {
+            writeln!(
+                f,
+                "note: the nodal errors are at rounding from level {level} on, where the global ones are not: the discrete equations reproduce this u at the nodes (on the sphere K u is a constant times ∫u, and the symmetric meshes' node rule integrates a u such as x*y+z exactly), so no nodal order is measured; an exact solution without that symmetry, such as exp(x), shows it"
+            )?;
+        }
         writeln!(f, "{}", self.theory.note)?;
         if let Some(p) = &self.plot {
             writeln!(f, "wrote plot to {p}")?;
