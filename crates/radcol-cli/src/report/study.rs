@@ -193,7 +193,7 @@ impl fmt::Display for StudyFooter {
         if let Some(level) = self.nodes_at_rounding {
             writeln!(
                 f,
-                "note: the nodal errors are at rounding from level {level} on, where the global ones are not: the discrete equations reproduce this u at the nodes (on the sphere K u is a constant times ∫u, and the symmetric meshes' node rule integrates a u such as x*y+z exactly), so no nodal order is measured; an exact solution without that symmetry, such as exp(x), shows it"
+                "note: the nodal errors are at rounding from level {level} on, where the global ones are not: the discrete equations reproduce this u at the nodes (on the sphere K u = ∫u / 4πR², and for a u such as x*y+z, whose integral is 0, the symmetric meshes' node rule gives 0 exactly too), so no nodal order is measured; an exact solution without that symmetry, such as exp(x), shows it"
             )?;
         }
         writeln!(f, "{}", self.theory.note)?;

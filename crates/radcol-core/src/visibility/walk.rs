@@ -83,8 +83,8 @@ impl PartialRow {
 pub(crate) struct Seen {
     /// The partly visible pairs, with their candidate occluders.
     pub(crate) partial: PartialRow,
-    /// Elements hidden from every row point (ascending): their entries are
-    /// zero, and the plan culls them.
+    /// Elements hidden from every row point: their entries are zero, and
+    /// the plan culls them.
     pub(crate) hidden: Vec<u32>,
 }
 
@@ -115,7 +115,6 @@ pub(crate) fn partial_pairs(
     for &root in &tree.roots {
         walk.visit(root, None, &mut seen);
     }
-    seen.hidden.sort_unstable();
     seen
 }
 
