@@ -4,7 +4,9 @@
 //! A GPU crate runs [`check_backend`] on its backend; core runs it on an
 //! independent slow path ([`generic_matrix`]) that evaluates every far pair
 //! point by point through [`ElementIntegrator::apply_rule`](super::ElementIntegrator::apply_rule) and
-//! [`crate::kernel::g`] instead of the vectorised run loop.
+//! [`crate::kernel::g`] instead of the vectorised run loop. Near pairs take
+//! the same walk as the backend ([`ElementIntegrator::integrate_rows`](super::ElementIntegrator::integrate_rows), whose
+//! agreement with the row-by-row integral its own tests check).
 
 use super::{AssemblyBackend, AssemblyPlan, CpuBackend, FieldPoint, PairClass, QuadratureOptions};
 use crate::discretization::Discretization;
@@ -163,8 +165,23 @@ pub fn generic_matrix(plan: &AssemblyPlan) -> DenseMatrix {
                 let out = &mut row[k * f..(k + 1) * f];
                 match plan.class(p.element, k) {
                     PairClass::Culled => {}
-                    PairClass::Near | PairClass::OnElement => {
+                    PairClass::Near | PairClass::OnElement if k == p.element => {
                         integrator.integrate(&fp, k, nodes.degree(), &phi, out);
+                    }
+                    PairClass::Near | PairClass::OnElement => {
+                        // Near pairs are walked for the element's rows at
+                        // once (checked against row by row in `rows.rs`).
+                        let ps: Vec<FieldPoint> = disc.points()[p.element * f..(p.element + 1) * f]
+                            .iter()
+                            .map(|q| FieldPoint {
+                                position: q.position,
+                                normal: q.normal,
+                                on_element: None,
+                            })
+                            .collect();
+                        let mut rows = vec![0.0; f * f];
+                        integrator.integrate_rows(&ps, k, nodes.degree(), &phi, &mut rows);
+                        out.copy_from_slice(&rows[p.node * f..(p.node + 1) * f]);
                     }
                     PairClass::Partial => {
                         plan.integrate_partial(

@@ -21,6 +21,15 @@ pub trait SurfaceMap: Send + Sync + Debug {
     fn is_affine(&self) -> bool {
         false
     }
+    /// F(x) with DF(x) applied to `u` and to `v`: what a surface point needs
+    /// (position, tangents). Maps override it to share work between the three.
+    fn frame(&self, x: DVec3, u: DVec3, v: DVec3) -> [DVec3; 3] {
+        [
+            self.map(x),
+            self.push_forward(x, u),
+            self.push_forward(x, v),
+        ]
+    }
 }
 
 /// F(x) = x: flat patches (polyhedra, OBJ faces).
@@ -58,6 +67,12 @@ impl SurfaceMap for RadialProjection {
         let len = x.length();
         let xh = x / len;
         self.semi_axes * ((v - xh * xh.dot(v)) / len)
+    }
+    fn frame(&self, x: DVec3, u: DVec3, v: DVec3) -> [DVec3; 3] {
+        let inv = 1.0 / x.length();
+        let xh = x * inv;
+        let d = |w: DVec3| self.semi_axes * ((w - xh * xh.dot(w)) * inv);
+        [self.center + self.semi_axes * xh, d(u), d(v)]
     }
 }
 

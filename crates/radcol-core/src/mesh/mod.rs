@@ -258,12 +258,11 @@ impl Mesh {
         let e = &self.elements[k];
         let f = self.map_of(k);
         let x = e.param_point(s, t);
-        let ds = f.push_forward(x, e.param[1] - e.param[0]);
-        let dt = f.push_forward(x, e.param[2] - e.param[0]);
+        let [position, ds, dt] = f.frame(x, e.param[1] - e.param[0], e.param[2] - e.param[0]);
         let cross = ds.cross(dt);
         let jacobian = cross.length();
         SurfacePoint {
-            position: f.map(x),
+            position,
             normal: cross / jacobian,
             jacobian,
         }

@@ -20,6 +20,7 @@ use glam::DVec3;
 use std::f64::consts::FRAC_1_PI;
 use std::sync::Arc;
 
+mod rows;
 mod self_pair;
 pub use self_pair::{SelfRules, MAX_SELF_DEPTH};
 
@@ -256,23 +257,10 @@ impl<'a> ElementIntegrator<'a> {
         let det = (e1[0] * e2[1] - e1[1] * e2[0]).abs();
         let m = out.len();
         let mut buf = [0.0f64; 64];
-        // A flat element is affine in (s, t): position from its mapped
-        // vertices, one normal and one Jacobian, without the map per point.
-        let affine = self.mesh.is_flat(k).then(|| {
-            let [v0, v1, v2] = self.mesh.vertices(k);
-            let q0 = self.mesh.point(k, 0.0, 0.0);
-            (v0, v1 - v0, v2 - v0, q0.normal, q0.jacobian)
-        });
+        let map = self.element_map(k);
         for (&[x, y], &w) in rule.points.iter().zip(&rule.weights) {
             let st = [a[0] + x * e1[0] + y * e2[0], a[1] + x * e1[1] + y * e2[1]];
-            let q = match affine {
-                Some((v0, es, et, normal, jacobian)) => crate::mesh::SurfacePoint {
-                    position: v0 + es * st[0] + et * st[1],
-                    normal,
-                    jacobian,
-                },
-                None => self.mesh.point(k, st[0], st[1]),
-            };
+            let q = map.point(st);
             let gw =
                 g(p.position, p.normal, q.position, q.normal) * q.jacobian * w * det * FRAC_1_PI;
             if gw == 0.0 {
@@ -284,6 +272,18 @@ impl<'a> ElementIntegrator<'a> {
             }
         }
         rule.len() as u64
+    }
+
+    /// Element `k`'s map, ready to evaluate at many (s, t).
+    #[inline]
+    fn element_map(&self, k: usize) -> ElementMap<'_> {
+        if self.mesh.is_flat(k) {
+            let [v0, v1, v2] = self.mesh.vertices(k);
+            let q0 = self.mesh.point(k, 0.0, 0.0);
+            ElementMap::Affine(v0, v1 - v0, v2 - v0, q0)
+        } else {
+            ElementMap::Curved(self.mesh, k)
+        }
     }
 
     fn integrate_adaptive(
@@ -316,6 +316,29 @@ impl<'a> ElementIntegrator<'a> {
             }
         };
         self.apply_rule(p, k, tri, self.ladder.rule(degree), phi, out)
+    }
+}
+
+/// An element's map for evaluating many points: a flat element is affine in
+/// (s, t), with position from its mapped vertices and one normal and
+/// Jacobian, without the surface map per point.
+enum ElementMap<'a> {
+    /// Vertex, edge vectors (s, t) and the constant normal and Jacobian.
+    Affine(DVec3, DVec3, DVec3, crate::mesh::SurfacePoint),
+    /// A curved element of a mesh.
+    Curved(&'a Mesh, usize),
+}
+
+impl ElementMap<'_> {
+    #[inline]
+    fn point(&self, [s, t]: [f64; 2]) -> crate::mesh::SurfacePoint {
+        match *self {
+            ElementMap::Affine(v0, es, et, q0) => crate::mesh::SurfacePoint {
+                position: v0 + es * s + et * t,
+                ..q0
+            },
+            ElementMap::Curved(mesh, k) => mesh.point(k, s, t),
+        }
     }
 }
 

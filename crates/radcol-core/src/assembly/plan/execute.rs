@@ -242,11 +242,33 @@ impl BlockFill<'_, '_> {
         &mut block[row * ncols + ke * f..row * ncols + (ke + 1) * f]
     }
 
-    /// Near and on-element pairs: adaptive subdivision or the split-at-P rule.
+    /// Near and on-element pairs: adaptive subdivision (for every row at
+    /// once) or the split-at-P rule (row by row).
     fn adaptive(&self, run: std::ops::Range<usize>, block: &mut [f64]) -> u64 {
         let r = self.plan.disc.nodes().degree();
+        let f = self.f;
+        let off: Vec<FieldPoint> = self
+            .pts
+            .iter()
+            .map(|p| FieldPoint {
+                position: p.position,
+                normal: p.normal,
+                on_element: None,
+            })
+            .collect();
+        let mut rows = vec![0.0; off.len() * f];
         let mut evals = 0;
         for ke in run {
+            if ke != self.kp {
+                rows.fill(0.0);
+                evals += self
+                    .integrator
+                    .integrate_rows(&off, ke, r, self.phi, &mut rows);
+                for (row, vals) in rows.chunks_exact(f).enumerate() {
+                    self.slot(block, row, ke).copy_from_slice(vals);
+                }
+                continue;
+            }
             for (row, p) in self.pts.iter().enumerate() {
                 let out = self.slot(block, row, ke);
                 out.fill(0.0);
