@@ -10,11 +10,14 @@
 //! close to the element, and a fixed tensor Gauss rule on the whole Duffy
 //! square erred by 6 % of the element's integral (row sums off by 2.9e-3 at
 //! level 2 for every quadrature tolerance). Each Duffy window is therefore
-//! checked: its n × n rule is compared with n/2 × n/2 rules on its four
-//! quadrants, and where the two disagree by more than the tolerance the
-//! quadrants are integrated the same way, recursively. Where the rule is
-//! already accurate (the sphere, every flat-ish element) the result is the
-//! n × n value as before, at twice the kernel evaluations of a self pair.
+//! integrated up a ladder of tensor Gauss rules (0.3, 0.5, 0.7 and 1 times
+//! `self_order` points a direction) until two successive rungs agree to the
+//! tolerance, the higher taken; where the last two disagree, its quadrants
+//! are integrated the same way, recursively. Smooth windows stop early: on
+//! the sphere 1 300–1 800 kernel evaluations a self pair, against 4 000–4 700
+//! when every window took the full rule and was checked against half-order
+//! ones (and on the ellipsoid 15 % fewer, closer to a reference: 4e-15
+//! against 4e-13 of the integral at level 2).
 
 use super::{ElementIntegrator, FieldPoint, Integrand};
 use crate::kernel::g;
@@ -29,27 +32,41 @@ pub const MAX_SELF_DEPTH: u32 = 10;
 /// Nodes and weights of a Gauss–Legendre rule on [0, 1].
 type Rule = (Vec<f64>, Vec<f64>);
 
-/// Gauss–Legendre rules on [0, 1] for self pairs: `radial` and `angular` with
-/// `self_order` points, `graded` with about half as many for each piece of a
-/// geometrically graded angular interval; each with a half-order companion
-/// used on the quadrants to check it.
+/// Gauss–Legendre rules on [0, 1] for self pairs, each a ladder of
+/// increasing orders: `plain` (radial, and angular on an interval of its
+/// own) up to `self_order` points, `graded` with about half as many for
+/// each piece of a geometrically graded angular interval.
 #[derive(Clone, Debug)]
 pub struct SelfRules {
-    radial: [Rule; 2],
-    angular: [Rule; 2],
-    graded: [Rule; 2],
+    plain: Vec<Rule>,
+    graded: Vec<Rule>,
 }
 
 impl SelfRules {
-    /// Rules for `order` points per direction.
+    /// Rules for up to `order` points per direction.
     pub fn new(order: usize) -> Self {
+        let ladder = |n: usize| {
+            let mut orders: Vec<usize> = [0.3, 0.5, 0.7]
+                .iter()
+                .map(|&x| (x * n as f64).round() as usize)
+                .chain([n])
+                .map(|m| m.max(2))
+                .collect();
+            orders.dedup();
+            orders.into_iter().map(gauss_legendre01).collect::<Vec<_>>()
+        };
         let order = order.max(2);
-        let pair = |n: usize| [gauss_legendre01(n), gauss_legendre01(n.div_ceil(2))];
         Self {
-            radial: pair(order),
-            angular: pair(order),
-            graded: pair(order.div_ceil(2) + 2),
+            plain: ladder(order),
+            graded: ladder(order.div_ceil(2) + 2),
         }
+    }
+
+    /// The angular ladder of a window, and the radial one with as many steps.
+    fn ladders(&self, graded: bool) -> (&[Rule], &[Rule]) {
+        let angular = if graded { &self.graded } else { &self.plain };
+        let steps = angular.len().min(self.plain.len());
+        (&angular[..steps], &self.plain[..steps])
     }
 }
 
@@ -64,6 +81,8 @@ struct Duffy<'a> {
     det: f64,
     phi: &'a Integrand<'a>,
     m: usize,
+    /// Whether its angular interval is graded (the shorter angular rules).
+    graded: bool,
 }
 
 /// A rectangle [u0, u1] × [v0, v1] of Duffy coordinates.
@@ -99,7 +118,8 @@ impl ElementIntegrator<'_> {
         let corners = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
         let m = out.len();
         let mut evals = 0;
-        // First pass: every window with its n × n rule (the values to check).
+        // First pass: every window with the ladder's first rules (the
+        // integral's size, and the first value to compare).
         let mut windows = Vec::with_capacity(24);
         for e in 0..3 {
             let (a, b) = (corners[e], corners[(e + 1) % 3]);
@@ -112,11 +132,6 @@ impl ElementIntegrator<'_> {
             let ab2 = ab[0] * ab[0] + ab[1] * ab[1];
             let foot = (-(pa[0] * ab[0] + pa[1] * ab[1]) / ab2).clamp(0.0, 1.0);
             let breaks = graded_breaks(foot, det / ab2);
-            let rules = if breaks.len() > 2 {
-                &self.self_rule.graded
-            } else {
-                &self.self_rule.angular
-            };
             let duffy = Duffy {
                 p,
                 k,
@@ -126,12 +141,14 @@ impl ElementIntegrator<'_> {
                 det,
                 phi,
                 m,
+                graded: breaks.len() > 2,
             };
+            let (angular, radial) = self.self_rule.ladders(duffy.graded);
             for w in breaks.windows(2) {
                 let window = [0.0, 1.0, w[0], w[1]];
-                let mut coarse = [0.0f64; 64];
-                evals += self.tensor(&duffy, window, 0, &rules[0], &mut coarse);
-                windows.push((duffy, window, rules, coarse));
+                let mut first = [0.0f64; 64];
+                evals += self.tensor(&duffy, window, &radial[0], &angular[0], &mut first);
+                windows.push((duffy, window, first));
             }
         }
         // The size of the integral, as the sum of its windows' magnitudes:
@@ -139,71 +156,70 @@ impl ElementIntegrator<'_> {
         // the total cancel to rounding, and a tolerance relative to that
         // would split every window to the depth limit.
         let scale = (0..m)
-            .map(|j| windows.iter().map(|w| w.3[j].abs()).sum::<f64>())
+            .map(|j| windows.iter().map(|w| w.2[j].abs()).sum::<f64>())
             .fold(0.0, f64::max);
         let tol = self.opts.tol * scale;
-        for (duffy, window, rules, coarse) in &windows {
-            evals += self.check_window(duffy, *window, rules, coarse, tol, 0, out);
+        for (duffy, window, first) in &windows {
+            evals += self.converge(duffy, *window, first, tol, 0, out);
         }
         evals
     }
 
-    /// Adds the window's integral to `out`: `coarse` (its n × n value) when
-    /// the half-order rules on its quadrants agree with it to `tol`, else the
-    /// quadrants' own checked values.
-    #[allow(clippy::too_many_arguments)]
-    fn check_window(
+    /// Adds the window's integral to `out`: up the ladder of rules from
+    /// `first` (the first rung's value) until two successive rungs agree to
+    /// `tol`, taking the higher; where even the last two disagree, the
+    /// quadrants' own values (to a quarter of the tolerance each), down to
+    /// [`MAX_SELF_DEPTH`].
+    fn converge(
         &self,
         d: &Duffy<'_>,
         window: Window,
-        rules: &[Rule; 2],
-        coarse: &[f64; 64],
+        first: &[f64; 64],
         tol: f64,
         depth: u32,
         out: &mut [f64],
     ) -> u64 {
         let m = d.m;
-        let mut fine = [0.0f64; 64];
-        let mut evals = self.tensor(d, window, 1, &rules[1], &mut fine);
-        if (0..m).all(|j| (coarse[j] - fine[j]).abs() <= tol) {
-            for (o, v) in out.iter_mut().zip(&coarse[..m]) {
-                *o += v;
+        let (angular, radial) = self.self_rule.ladders(d.graded);
+        let mut prev = *first;
+        let mut evals = 0;
+        for (ur, vr) in radial.iter().zip(angular).skip(1) {
+            let mut next = [0.0f64; 64];
+            evals += self.tensor(d, window, ur, vr, &mut next);
+            let agree = (0..m).all(|j| (next[j] - prev[j]).abs() <= tol);
+            prev = next;
+            if agree {
+                for (o, v) in out.iter_mut().zip(&prev[..m]) {
+                    *o += v;
+                }
+                return evals;
             }
-            return evals;
         }
-        fine = [0.0f64; 64];
-        for q in quadrants(window) {
-            evals += self.tensor(d, q, 1, &rules[1], &mut fine);
-        }
-        let agree = (0..m).all(|j| (coarse[j] - fine[j]).abs() <= tol);
-        if !agree && depth >= MAX_SELF_DEPTH {
+        if depth >= MAX_SELF_DEPTH {
             self.note_shortfall(d.p, d.k, 0.0);
-        }
-        if agree || depth >= MAX_SELF_DEPTH {
-            let best = if agree { coarse } else { &fine };
-            for (o, v) in out.iter_mut().zip(&best[..m]) {
+            for (o, v) in out.iter_mut().zip(&prev[..m]) {
                 *o += v;
             }
             return evals;
         }
         for q in quadrants(window) {
             let mut part = [0.0f64; 64];
-            evals += self.tensor(d, q, 0, &rules[0], &mut part);
-            evals += self.check_window(d, q, rules, &part, 0.25 * tol, depth + 1, out);
+            evals += self.tensor(d, q, &radial[0], &angular[0], &mut part);
+            evals += self.converge(d, q, &part, 0.25 * tol, depth + 1, out);
         }
         evals
     }
 
-    /// Adds the tensor rule `angular` × (radial rule `which`) on `window` to `acc`.
+    /// Adds the tensor rule `radial` × `angular` on `window` to `acc`.
     fn tensor(
         &self,
         d: &Duffy<'_>,
         [u0, u1, v0, v1]: Window,
-        which: usize,
+        radial: &Rule,
         angular: &Rule,
         acc: &mut [f64; 64],
     ) -> u64 {
-        let (ux, uw) = &self.self_rule.radial[which];
+        let (ux, uw) = radial;
         let (vx, vw) = angular;
         let mut buf = [0.0f64; 64];
         let mut evals = 0;
@@ -255,4 +271,79 @@ fn graded_breaks(foot: f64, delta: f64) -> Vec<f64> {
     pts.sort_by(f64::total_cmp);
     pts.dedup_by(|a, b| (*a - *b).abs() < 1e-15);
     pts
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::assembly::QuadratureOptions;
+    use crate::geometry::shapes::sphere;
+    use crate::mesh::Mesh;
+    use crate::nodes::NodeSet;
+    use crate::quadrature::RuleLadder;
+    use glam::DVec3;
+    use std::sync::Arc;
+
+    /// On the unit sphere G ≡ 1/4, so the self integral at every node is
+    /// ∫_Δ φ dS / 4π, here from one plain rule of degree 30 (no kernel, no
+    /// Duffy windows), for r = 1..3 on elements of three sizes.
+    #[test]
+    fn self_pairs_on_the_sphere_are_the_closed_form() {
+        let ladder = RuleLadder::new();
+        for level in [0, 2, 4] {
+            let mesh = Mesh::new(Arc::new(sphere(1.0)), level);
+            let integrator = ElementIntegrator::new(&mesh, &ladder, QuadratureOptions::default());
+            for r in 1..=3 {
+                let nodes = NodeSet::new(r, 0.1).unwrap();
+                let phi = |_k: usize, st: [f64; 2], _q: DVec3, out: &mut [f64]| {
+                    nodes.eval_basis(st[0], st[1], out)
+                };
+                let f = nodes.len();
+                let k = mesh.len() / 3;
+                let mut exact = vec![0.0; f];
+                let mut basis = vec![0.0; f];
+                // Composite: σ cut into 8 × 8 × 2 triangles, as J is far
+                // from a polynomial on an octant.
+                let rule = ladder.rule(30);
+                let n = 8;
+                let h = 1.0 / n as f64;
+                for i in 0..n {
+                    for j in 0..n - i {
+                        let (s0, t0) = (i as f64 * h, j as f64 * h);
+                        let mut pieces = vec![[[s0, t0], [s0 + h, t0], [s0, t0 + h]]];
+                        if i + j + 1 < n {
+                            pieces.push([[s0 + h, t0 + h], [s0, t0 + h], [s0 + h, t0]]);
+                        }
+                        for [a, b, c] in pieces {
+                            for (&[x, y], &w) in rule.points.iter().zip(&rule.weights) {
+                                let s = a[0] + x * (b[0] - a[0]) + y * (c[0] - a[0]);
+                                let t = a[1] + x * (b[1] - a[1]) + y * (c[1] - a[1]);
+                                nodes.eval_basis(s, t, &mut basis);
+                                let jw = mesh.point(k, s, t).jacobian * w * h * h
+                                    / (4.0 * std::f64::consts::PI);
+                                exact.iter_mut().zip(&basis).for_each(|(e, b)| *e += jw * b);
+                            }
+                        }
+                    }
+                }
+                let scale: f64 = exact.iter().map(|x| x.abs()).sum();
+                for &[s, t] in nodes.points() {
+                    let q = mesh.point(k, s, t);
+                    let p = FieldPoint {
+                        position: q.position,
+                        normal: q.normal,
+                        on_element: Some((k, [s, t])),
+                    };
+                    let mut out = vec![0.0; f];
+                    integrator.integrate(&p, k, r, &phi, &mut out);
+                    for (a, b) in out.iter().zip(&exact) {
+                        assert!(
+                            (a - b).abs() <= 1e-12 * scale,
+                            "level {level} r {r}: {a} against {b}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }
