@@ -243,5 +243,11 @@ mod tests {
         let eps = 1e-6;
         let fd = (f.map(x + v * eps) - f.map(x - v * eps)) / (2.0 * eps);
         assert!((fd - f.push_forward(x, v)).length() < 1e-8);
+        // The one-call frame is the map and its two push-forwards.
+        let u = DVec3::new(0.2, -0.3, 0.05);
+        let [position, du, dv] = f.frame(x, u, v);
+        assert!((position - f.map(x)).length() < 1e-15);
+        assert!((du - f.push_forward(x, u)).length() < 1e-15);
+        assert!((dv - f.push_forward(x, v)).length() < 1e-15);
     }
 }

@@ -395,3 +395,49 @@ pub fn piece_ball(mesh: &Mesh, k: usize, tri: [[f64; 2]; 3], curved: bool) -> (D
     }
     (centre, r)
 }
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use crate::mesh::Mesh;
+    use crate::nodes::NodeSet;
+    use crate::quadrature::RuleLadder;
+
+    /// ∫_{Δ_k} φ_j dS / 4π on the unit sphere, where G ≡ 1/4: what every
+    /// row of element k's integrals equals, near or on the element. From a
+    /// degree-30 rule on σ cut into 8 × 8 × 2 triangles (the Jacobian is far
+    /// from a polynomial on an octant), with no kernel and no subdivision
+    /// towards a point.
+    pub(crate) fn unit_sphere_row(
+        mesh: &Mesh,
+        k: usize,
+        nodes: &NodeSet,
+        ladder: &RuleLadder,
+    ) -> Vec<f64> {
+        let f = nodes.len();
+        let mut exact = vec![0.0; f];
+        let mut basis = vec![0.0; f];
+        let rule = ladder.rule(30);
+        let n = 8;
+        let h = 1.0 / n as f64;
+        for i in 0..n {
+            for j in 0..n - i {
+                let (s0, t0) = (i as f64 * h, j as f64 * h);
+                let mut pieces = vec![[[s0, t0], [s0 + h, t0], [s0, t0 + h]]];
+                if i + j + 1 < n {
+                    pieces.push([[s0 + h, t0 + h], [s0, t0 + h], [s0 + h, t0]]);
+                }
+                for [a, b, c] in pieces {
+                    for (&[x, y], &w) in rule.points.iter().zip(&rule.weights) {
+                        let s = a[0] + x * (b[0] - a[0]) + y * (c[0] - a[0]);
+                        let t = a[1] + x * (b[1] - a[1]) + y * (c[1] - a[1]);
+                        nodes.eval_basis(s, t, &mut basis);
+                        let jw =
+                            mesh.point(k, s, t).jacobian * w * h * h / (4.0 * std::f64::consts::PI);
+                        exact.iter_mut().zip(&basis).for_each(|(e, b)| *e += jw * b);
+                    }
+                }
+            }
+        }
+        exact
+    }
+}

@@ -177,8 +177,8 @@ mod tests {
             .collect()
     }
 
-    /// On the unit sphere G ≡ 1/4, so every row is ∫_Δ φ dS / 4π, here from
-    /// one plain rule of degree 30 (no kernel, no subdivision).
+    /// On the unit sphere G ≡ 1/4, so every row is ∫_Δ φ dS / 4π
+    /// ([`unit_sphere_row`](super::super::tests::unit_sphere_row)).
     #[test]
     fn rows_on_the_sphere_are_the_closed_form() {
         let mesh = Mesh::new(Arc::new(sphere(1.0)), 2);
@@ -192,14 +192,7 @@ mod tests {
         for k in [0, 17, 63] {
             let ps = near_points(&mesh, k);
             assert!(ps.len() > 20, "{} near points", ps.len());
-            let mut exact = vec![0.0; f];
-            let mut basis = vec![0.0; f];
-            let rule = ladder.rule(30);
-            for (&[s, t], &w) in rule.points.iter().zip(&rule.weights) {
-                nodes.eval_basis(s, t, &mut basis);
-                let jw = mesh.point(k, s, t).jacobian * w / (4.0 * std::f64::consts::PI);
-                exact.iter_mut().zip(&basis).for_each(|(e, b)| *e += jw * b);
-            }
+            let exact = super::super::tests::unit_sphere_row(&mesh, k, &nodes, &ladder);
             let mut out = vec![0.0; ps.len() * f];
             integrator.integrate_rows(&ps, k, 2, &phi, &mut out);
             let scale: f64 = exact.iter().map(|x| x.abs()).sum();

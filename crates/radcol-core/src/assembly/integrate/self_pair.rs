@@ -300,32 +300,7 @@ mod tests {
                 };
                 let f = nodes.len();
                 let k = mesh.len() / 3;
-                let mut exact = vec![0.0; f];
-                let mut basis = vec![0.0; f];
-                // Composite: σ cut into 8 × 8 × 2 triangles, as J is far
-                // from a polynomial on an octant.
-                let rule = ladder.rule(30);
-                let n = 8;
-                let h = 1.0 / n as f64;
-                for i in 0..n {
-                    for j in 0..n - i {
-                        let (s0, t0) = (i as f64 * h, j as f64 * h);
-                        let mut pieces = vec![[[s0, t0], [s0 + h, t0], [s0, t0 + h]]];
-                        if i + j + 1 < n {
-                            pieces.push([[s0 + h, t0 + h], [s0, t0 + h], [s0 + h, t0]]);
-                        }
-                        for [a, b, c] in pieces {
-                            for (&[x, y], &w) in rule.points.iter().zip(&rule.weights) {
-                                let s = a[0] + x * (b[0] - a[0]) + y * (c[0] - a[0]);
-                                let t = a[1] + x * (b[1] - a[1]) + y * (c[1] - a[1]);
-                                nodes.eval_basis(s, t, &mut basis);
-                                let jw = mesh.point(k, s, t).jacobian * w * h * h
-                                    / (4.0 * std::f64::consts::PI);
-                                exact.iter_mut().zip(&basis).for_each(|(e, b)| *e += jw * b);
-                            }
-                        }
-                    }
-                }
+                let exact = super::super::tests::unit_sphere_row(&mesh, k, &nodes, &ladder);
                 let scale: f64 = exact.iter().map(|x| x.abs()).sum();
                 for &[s, t] in nodes.points() {
                     let q = mesh.point(k, s, t);
