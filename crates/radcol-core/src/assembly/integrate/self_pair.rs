@@ -43,19 +43,21 @@ pub struct SelfRules {
 }
 
 impl SelfRules {
-    /// Rules for up to `order` points per direction.
+    /// Rules for up to `order` points per direction (at least 4: a ladder
+    /// needs two rungs to compare, or every window would be split to
+    /// [`MAX_SELF_DEPTH`]).
     pub fn new(order: usize) -> Self {
         let ladder = |n: usize| {
             let mut orders: Vec<usize> = [0.3, 0.5, 0.7]
                 .iter()
                 .map(|&x| (x * n as f64).round() as usize)
                 .chain([n])
-                .map(|m| m.max(2))
+                .map(|m| m.max(1))
                 .collect();
             orders.dedup();
             orders.into_iter().map(gauss_legendre01).collect::<Vec<_>>()
         };
-        let order = order.max(2);
+        let order = order.max(4);
         Self {
             plain: ladder(order),
             graded: ladder(order.div_ceil(2) + 2),
@@ -283,6 +285,54 @@ mod tests {
     use crate::quadrature::RuleLadder;
     use glam::DVec3;
     use std::sync::Arc;
+
+    /// Every order a caller may give yields ladders of at least two rungs,
+    /// rising; and the smallest still integrates a self pair (it used to be
+    /// a single rung, which split every window to the depth limit).
+    #[test]
+    fn every_self_order_gives_a_ladder() {
+        for order in 0..=40 {
+            let rules = SelfRules::new(order);
+            for graded in [false, true] {
+                let (angular, radial) = rules.ladders(graded);
+                assert!(
+                    angular.len() >= 2 && radial.len() == angular.len(),
+                    "{order}"
+                );
+                for l in [angular, radial] {
+                    assert!(l.windows(2).all(|w| w[0].0.len() < w[1].0.len()), "{order}");
+                }
+            }
+        }
+        let mesh = Mesh::new(Arc::new(sphere(1.0)), 2);
+        let ladder = RuleLadder::new();
+        let opts = QuadratureOptions {
+            self_order: 2,
+            ..QuadratureOptions::default()
+        };
+        let integrator = ElementIntegrator::new(&mesh, &ladder, opts);
+        let nodes = NodeSet::new(1, 0.1).unwrap();
+        let phi = |_k: usize, st: [f64; 2], _q: DVec3, out: &mut [f64]| {
+            nodes.eval_basis(st[0], st[1], out)
+        };
+        let exact = super::super::tests::unit_sphere_row(&mesh, 5, &nodes, &ladder);
+        let [s, t] = nodes.points()[0];
+        let q = mesh.point(5, s, t);
+        let p = FieldPoint {
+            position: q.position,
+            normal: q.normal,
+            on_element: Some((5, [s, t])),
+        };
+        let mut out = vec![0.0; 3];
+        let evals = integrator.integrate(&p, 5, 1, &phi, &mut out);
+        assert!(evals < 100_000, "{evals} kernel evaluations");
+        for (a, b) in out.iter().zip(&exact) {
+            assert!(
+                (a - b).abs() <= 1e-12 * exact.iter().sum::<f64>(),
+                "{a} against {b}"
+            );
+        }
+    }
 
     /// On the unit sphere G ≡ 1/4, so the self integral at every node is
     /// ∫_Δ φ dS / 4π, here from one plain rule of degree 30 (no kernel, no
