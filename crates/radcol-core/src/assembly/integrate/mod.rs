@@ -59,7 +59,8 @@ pub struct QuadratureOptions {
     /// surfaces a gap g apart resolve where 2^-d h < g (box:1,1e-6,1 at level
     /// 2 needs d ≈ 18: at the former limit 14 its nodal error was 0.45).
     pub max_depth: u32,
-    /// Gauss points per direction in each Duffy triangle of a self pair.
+    /// Most Gauss points per direction in each Duffy window of a self pair
+    /// (the top of its ladder of rules; at least 8 are used).
     pub self_order: usize,
     /// Partly visible pairs: exact clipping or rays per quadrature point.
     pub visibility: VisibilityMode,
