@@ -207,8 +207,7 @@ fn predicted_size_from_the_geometry() {
         let opts = HOptions::default();
         let entries = PlanEntries::new(&c.plan);
         let geometric = radiosity::predict(c.plan.discretization(), &opts, f64::INFINITY);
-        let (rows, cols) = entries.boxes();
-        let planned = HMatrix::predict(&rows, &cols, &entries, &opts, f64::INFINITY);
+        let planned = entries.predict(&opts, f64::INFINITY);
         let built = entries.build(&opts).heap_bytes() as f64;
         println!(
             "{name}: predicted {:.0} B from the geometry ({:.0} near), {:.0} B from the plan ({:.0} near), built {built:.0} B",

@@ -67,6 +67,13 @@ fn compressed(p: &Problem, tol: f64, level: u32, max_edge: Option<f64>) -> Solve
         predicted > 0.0 && predicted <= built,
         "{predicted} against {built}"
     );
+    // Predicted again from the plan before a block was computed: dense
+    // leaves exactly, low-rank ones at rank 1, so no more than was built.
+    let planned = out.operator_decision.planned_bytes.expect("planned");
+    assert!(
+        planned > 0.0 && planned <= built,
+        "{planned} against {built}"
+    );
     out
 }
 

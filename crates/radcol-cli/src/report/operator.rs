@@ -22,6 +22,9 @@ pub struct OperatorReport {
     sampled_error: Option<f64>,
     /// Its bytes as predicted from the geometry before it was built.
     predicted_bytes: Option<f64>,
+    /// Its bytes as predicted from the plan (occlusion included) before a
+    /// block was computed.
+    planned_bytes: Option<f64>,
 }
 
 impl OperatorReport {
@@ -34,6 +37,7 @@ impl OperatorReport {
             compression: out.operator.stats(),
             sampled_error: out.operator_decision.sampled_error,
             predicted_bytes: out.operator_decision.predicted_bytes,
+            planned_bytes: out.operator_decision.planned_bytes,
         }
     }
 }
@@ -53,7 +57,7 @@ impl fmt::Display for OperatorReport {
             ),
             Some(s) => writeln!(
                 f,
-                "  operator    compressed, {} ({:.2} % of dense), product error {:.1e} at {SAMPLED_ROWS} rows: {} low-rank blocks (max rank {}{}), {} dense, {} zero (shadowed); {} predicted from the geometry; {}",
+                "  operator    compressed, {} ({:.2} % of dense), product error {:.1e} at {SAMPLED_ROWS} rows: {} low-rank blocks (max rank {}{}), {} dense, {} zero (shadowed); predicted {} from the geometry, {} from the plan; {}",
                 gb(self.bytes as f64),
                 100.0 * s.compression(),
                 self.sampled_error.unwrap_or(f64::NAN),
@@ -67,6 +71,7 @@ impl fmt::Display for OperatorReport {
                 s.dense_blocks,
                 s.zero_blocks,
                 gb(self.predicted_bytes.unwrap_or(f64::NAN)),
+                gb(self.planned_bytes.unwrap_or(f64::NAN)),
                 self.reason
             ),
         }

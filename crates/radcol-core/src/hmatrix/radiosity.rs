@@ -40,6 +40,15 @@ impl<'a> PlanEntries<'a> {
         boxes(self.plan.discretization())
     }
 
+    /// What [`Self::build`] will store ([`HMatrix::predict`]), counted over
+    /// the plan's block tree: unlike [`predict`] from the geometry, the
+    /// dense leaves that occlusion splits blocks into are counted exactly
+    /// (low-rank leaves still at rank 1).
+    pub fn predict(&self, opts: &HOptions, limit: f64) -> HPrediction {
+        let (rows, cols) = self.boxes();
+        HMatrix::predict(&rows, &cols, self, opts, limit)
+    }
+
     /// The hierarchical matrix of the plan.
     pub fn build(&self, opts: &HOptions) -> HMatrix {
         let (rows, cols) = self.boxes();

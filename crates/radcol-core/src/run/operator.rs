@@ -53,8 +53,13 @@ pub struct OperatorDecision {
     /// ([`crate::hmatrix::HMatrix::sampled_error`]); None when dense.
     pub sampled_error: Option<f64>,
     /// The compressed operator's bytes as predicted from the geometry
-    /// before it was built ([`HPrediction::bytes`]); None when dense.
+    /// before the plan was built ([`HPrediction::bytes`]); None when dense.
     pub predicted_bytes: Option<f64>,
+    /// The same predicted again from the plan, before a block is computed
+    /// ([`PlanEntries::predict`]): occlusion's dense leaves included, so on
+    /// occluded scenes it is the closer (low-rank blocks still counted at
+    /// rank 1); None when dense.
+    pub planned_bytes: Option<f64>,
 }
 
 /// Rows of the dense matrix computed to check a compressed operator.
@@ -69,6 +74,7 @@ impl OperatorDecision {
             switchable: false,
             sampled_error: None,
             predicted_bytes: None,
+            planned_bytes: None,
         }
     }
 }
@@ -98,6 +104,7 @@ pub fn decide(
             switchable: false,
             sampled_error: None,
             predicted_bytes: None,
+            planned_bytes: None,
         })
     };
     match (cfg.operator, cfg.solver) {
@@ -122,6 +129,7 @@ pub fn decide(
             switchable: true,
             sampled_error: None,
             predicted_bytes: None,
+            planned_bytes: None,
         }),
         (OperatorChoice::Auto, SolverKind::Gmres) => decision(
             OperatorKind::Compressed,
@@ -217,6 +225,7 @@ pub(crate) fn lighter_than_dense(
         switchable: false,
         sampled_error: None,
         predicted_bytes: Some(p.bytes()),
+        planned_bytes: None,
     })
 }
 
@@ -255,11 +264,15 @@ pub(crate) fn predict_compressed(
 
 /// Builds the compressed operator from `plan`'s integrators, measures its
 /// product error at [`SAMPLED_ROWS`] rows into `decision`, and puts its
-/// size into `memory` (refused, when `cfg.check_memory`, where the rest of
-/// the peak no longer fits); returns it with its kernel evaluations.
+/// size into `memory`; returns it with its kernel evaluations. Before any
+/// block is computed its size is predicted again from the plan (occlusion
+/// included), into `decision` and `memory`. When `cfg.check_memory`, a
+/// peak that does not fit is refused then, and again once the operator is
+/// built.
 ///
 /// # Errors
-/// [`InputError::CompressedTooLarge`].
+/// [`InputError::PeakTooLarge`] from the plan's prediction,
+/// [`InputError::CompressedTooLarge`] once built.
 pub(crate) fn build_compressed(
     plan: &AssemblyPlan,
     cfg: &SolveConfig,
@@ -267,6 +280,15 @@ pub(crate) fn build_compressed(
     memory: &mut MemoryUse,
 ) -> Result<(HMatrix, u64), InputError> {
     let entries = PlanEntries::new(plan);
+    let available = available_memory().filter(|_| cfg.check_memory);
+    // Counted to four times what fits, like the geometry's prediction.
+    let limit = available.map_or(f64::INFINITY, |a| 4.0 * (a / 10 * 9) as f64);
+    let planned = entries.predict(&cfg.compression, limit).bytes();
+    decision.planned_bytes = Some(planned);
+    *memory = memory.with_matrix(Some(planned));
+    if cfg.check_memory {
+        memory.check(available)?;
+    }
     let h = entries.build(&cfg.compression);
     decision.sampled_error = Some(h.sampled_error(&entries, SAMPLED_ROWS));
     // Not predicted again: the resident set now holds the operator.
