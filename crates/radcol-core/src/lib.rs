@@ -46,6 +46,7 @@
 //! A scene with occlusion, solved in three colour channels and rendered:
 //!
 //! ```
+//! # #[cfg(all(feature = "scenes", feature = "render"))] {
 //! use radcol_core::prelude::*;
 //!
 //! let scene = builtin("cornell").expect("a built-in scene")?;
@@ -57,7 +58,8 @@
 //! let image = render(outcome.discretization.mesh(), &rgb, &scene.camera_or_auto(), &options)?;
 //! let pixels: Vec<[u8; 3]> = tone_map(&image, &ToneMap::default());
 //! assert_eq!(pixels.len(), 64 * 48);
-//! # Ok::<(), radcol_core::prelude::Error>(())
+//! # }
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 #![warn(missing_docs)]
 

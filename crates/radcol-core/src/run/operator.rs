@@ -431,6 +431,7 @@ mod tests {
     /// not where the prediction is a large part of dense (the Cornell box),
     /// not when dense was asked for.
     #[test]
+    #[cfg(feature = "scenes")]
     fn pressure_compresses_only_what_is_much_smaller() {
         use crate::run::discretize;
         let disc = |name: &str, level, max_edge| {
