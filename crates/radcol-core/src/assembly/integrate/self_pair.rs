@@ -294,6 +294,16 @@ mod tests {
     use glam::DVec3;
     use std::sync::Arc;
 
+    /// P at (s, t) of element k, as a self pair sees it.
+    fn at_node(mesh: &Mesh, k: usize, [s, t]: [f64; 2]) -> FieldPoint {
+        let q = mesh.point(k, s, t);
+        FieldPoint {
+            position: q.position,
+            normal: q.normal,
+            on_element: Some((k, [s, t])),
+        }
+    }
+
     /// Every order a caller may give yields ladders of at least two rungs,
     /// rising; and the smallest still integrates a self pair (it used to be
     /// a single rung, which split every window to the depth limit).
@@ -320,12 +330,7 @@ mod tests {
         };
         let exact = super::super::tests::unit_sphere_row(&mesh, 5, &nodes, &ladder);
         let [s, t] = nodes.points()[0];
-        let q = mesh.point(5, s, t);
-        let p = FieldPoint {
-            position: q.position,
-            normal: q.normal,
-            on_element: Some((5, [s, t])),
-        };
+        let p = at_node(&mesh, 5, [s, t]);
         let mut out = vec![0.0; 3];
         let evals = integrator.integrate(&p, 5, 1, &phi, &mut out);
         eprintln!("EVALS {evals}");
@@ -357,12 +362,7 @@ mod tests {
                 let exact = super::super::tests::unit_sphere_row(&mesh, k, &nodes, &ladder);
                 let scale: f64 = exact.iter().map(|x| x.abs()).sum();
                 for &[s, t] in nodes.points() {
-                    let q = mesh.point(k, s, t);
-                    let p = FieldPoint {
-                        position: q.position,
-                        normal: q.normal,
-                        on_element: Some((k, [s, t])),
-                    };
+                    let p = at_node(&mesh, k, [s, t]);
                     let mut out = vec![0.0; f];
                     integrator.integrate(&p, k, r, &phi, &mut out);
                     for (a, b) in out.iter().zip(&exact) {
@@ -453,12 +453,7 @@ mod tests {
                     let (mut evals, mut pairs) = (0, 0);
                     for k in (0..mesh.len()).step_by(mesh.len() / 4) {
                         for &[s, t] in nodes.points() {
-                            let q = mesh.point(k, s, t);
-                            let p = FieldPoint {
-                                position: q.position,
-                                normal: q.normal,
-                                on_element: Some((k, [s, t])),
-                            };
+                            let p = at_node(&mesh, k, [s, t]);
                             let mut out = vec![0.0; nodes.len()];
                             evals += integrator.integrate(&p, k, r, &phi, &mut out);
                             pairs += 1;
