@@ -243,10 +243,7 @@ pub(crate) fn predict_compressed(
 ) -> Result<HPrediction, InputError> {
     let available = available_memory().filter(|_| cfg.check_memory);
     let pair_table = crate::assembly::pair_table_bytes(disc.mesh().len() as f64);
-    // Counted on past what fits, to four times as much, so that a refusal
-    // can say how much coarser would fit.
-    let limit = available.map_or(f64::INFINITY, |a| 4.0 * (a / 10 * 9) as f64);
-    let p = crate::hmatrix::radiosity::predict(disc, &cfg.compression, limit);
+    let p = crate::hmatrix::radiosity::predict(disc, &cfg.compression, count_limit(available));
     match available {
         Some(a) if pair_table + p.bytes() > (a / 10 * 9) as f64 => {
             Err(InputError::CompressedWontFit {
@@ -260,6 +257,14 @@ pub(crate) fn predict_compressed(
         }
         _ => Ok(p),
     }
+}
+
+/// Where a count of the compressed operator's bytes stops: past what fits
+/// (nine tenths of `available`), to four times as much, so that a refusal
+/// can say how much coarser would fit; no limit where memory is unknown or
+/// not checked.
+fn count_limit(available: Option<u64>) -> f64 {
+    available.map_or(f64::INFINITY, |a| 4.0 * (a / 10 * 9) as f64)
 }
 
 /// Builds the compressed operator from `plan`'s integrators, measures its
@@ -281,9 +286,9 @@ pub(crate) fn build_compressed(
 ) -> Result<(HMatrix, u64), InputError> {
     let entries = PlanEntries::new(plan);
     let available = available_memory().filter(|_| cfg.check_memory);
-    // Counted to four times what fits, like the geometry's prediction.
-    let limit = available.map_or(f64::INFINITY, |a| 4.0 * (a / 10 * 9) as f64);
-    let planned = entries.predict(&cfg.compression, limit).bytes();
+    let planned = entries
+        .predict(&cfg.compression, count_limit(available))
+        .bytes();
     decision.planned_bytes = Some(planned);
     *memory = memory.with_matrix(Some(planned));
     if cfg.check_memory {

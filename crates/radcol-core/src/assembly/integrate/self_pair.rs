@@ -333,7 +333,6 @@ mod tests {
         let p = at_node(&mesh, 5, [s, t]);
         let mut out = vec![0.0; 3];
         let evals = integrator.integrate(&p, 5, 1, &phi, &mut out);
-        eprintln!("EVALS {evals}");
         assert!(evals < 100_000, "{evals} kernel evaluations");
         for (a, b) in out.iter().zip(&exact) {
             assert!(
