@@ -2,7 +2,7 @@
 //! (dense or compressed, why, and what compression kept), and the memory
 //! predicted and measured.
 
-use radcol_core::hmatrix::HStats;
+use radcol_core::hmatrix::{HStats, SampledSize};
 use radcol_core::run::operator::SAMPLED_ROWS;
 use radcol_core::run::{MemoryUse, OperatorKind, SolveOutcome};
 use serde::Serialize;
@@ -25,6 +25,9 @@ pub struct OperatorReport {
     /// Its bytes as predicted from the plan (occlusion included) before a
     /// block was computed.
     planned_bytes: Option<f64>,
+    /// Its size as predicted from a sample of its admissible blocks, built
+    /// first, before the others were computed.
+    sampled_size: Option<SampledSize>,
 }
 
 impl OperatorReport {
@@ -38,6 +41,7 @@ impl OperatorReport {
             sampled_error: out.operator_decision.sampled_error,
             predicted_bytes: out.operator_decision.predicted_bytes,
             planned_bytes: out.operator_decision.planned_bytes,
+            sampled_size: out.operator_decision.sampled_bytes,
         }
     }
 }
@@ -57,7 +61,7 @@ impl fmt::Display for OperatorReport {
             ),
             Some(s) => writeln!(
                 f,
-                "  operator    compressed, {} ({:.2} % of dense), product error {:.1e} at {SAMPLED_ROWS} rows: {} low-rank blocks (max rank {}{}), {} dense, {} zero (shadowed); predicted {} from the geometry, {} from the plan; {}",
+                "  operator    compressed, {} ({:.2} % of dense), product error {:.1e} at {SAMPLED_ROWS} rows: {} low-rank blocks (max rank {}{}), {} dense, {} zero (shadowed); predicted {} from the geometry, {} from the plan, {}; {}",
                 gb(self.bytes as f64),
                 100.0 * s.compression(),
                 self.sampled_error.unwrap_or(f64::NAN),
@@ -72,6 +76,16 @@ impl fmt::Display for OperatorReport {
                 s.zero_blocks,
                 gb(self.predicted_bytes.unwrap_or(f64::NAN)),
                 gb(self.planned_bytes.unwrap_or(f64::NAN)),
+                match &self.sampled_size {
+                    Some(z) => format!(
+                        "{} from {} of its {} low-rank candidates built first ({:.1} % of their entries)",
+                        gb(z.bytes),
+                        z.sampled_blocks,
+                        z.admissible_blocks,
+                        100.0 * z.sampled_entries
+                    ),
+                    None => "no sample".into(),
+                },
                 self.reason
             ),
         }

@@ -21,6 +21,7 @@ pub mod aca;
 pub mod cluster;
 mod predict;
 pub mod radiosity;
+mod sample;
 
 use aca::{aca_plus, recompress, Cross, LowRank};
 use cluster::{Aabb, ClusterTree};
@@ -29,6 +30,7 @@ use serde::Serialize;
 use std::ops::ControlFlow;
 
 pub use predict::HPrediction;
+pub use sample::{SampledSize, MIN_PER_CLASS, SAMPLE_STRIDE};
 
 /// What is known of a matrix's blocks without computing an entry: which
 /// are zero, and which are smooth enough to compress. The block tree is
@@ -126,45 +128,14 @@ pub struct HStats {
 }
 
 impl HStats {
-    /// Stored numbers over the dense matrix's.
-    pub fn compression(&self) -> f64 {
-        self.stored as f64 / (self.shape.0 as f64 * self.shape.1 as f64).max(1.0)
-    }
-}
-
-/// A hierarchical matrix.
-#[derive(Clone, Debug)]
-pub struct HMatrix {
-    row_order: Vec<usize>,
-    col_order: Vec<usize>,
-    leaves: Vec<Leaf>,
-    stats: HStats,
-}
-
-impl HMatrix {
-    /// Builds the matrix whose rows and columns have these boxes (a point's
-    /// box is the point; a basis function's, its support), sampling
-    /// `entries` (leaves in parallel).
-    pub fn build(
-        row_boxes: &[Aabb],
-        col_boxes: &[Aabb],
-        entries: &dyn Entries,
-        opts: &HOptions,
-    ) -> Self {
-        let mut blocks = Vec::new();
-        let (rt, ct, _) = partition(row_boxes, col_boxes, entries, opts, &mut |_, _, r, c, a| {
-            blocks.push((r, c, a));
-            ControlFlow::Continue(())
-        });
-        let leaves: Vec<Leaf> = blocks
-            .par_iter()
-            .map(|&(r, c, admissible)| leaf(&rt, &ct, r, c, admissible, entries, opts.tol))
-            .collect();
+    /// What `leaves` hold (`admissible`: which were admissible blocks) in a
+    /// matrix of `shape`.
+    fn of(leaves: &[Leaf], admissible: &[bool], shape: (usize, usize)) -> Self {
         let mut stats = HStats {
-            shape: (row_boxes.len(), col_boxes.len()),
+            shape,
             ..Default::default()
         };
-        for (l, &(_, _, admissible)) in leaves.iter().zip(&blocks) {
+        for (l, &admissible) in leaves.iter().zip(admissible) {
             let (m, n) = (l.rows.len() as u64, l.cols.len() as u64);
             match &l.data {
                 LeafData::Zero => {
@@ -183,11 +154,41 @@ impl HMatrix {
                 }
             }
         }
-        Self {
-            row_order: rt.order,
-            col_order: ct.order,
-            leaves,
-            stats,
+        stats
+    }
+
+    /// Stored numbers over the dense matrix's.
+    pub fn compression(&self) -> f64 {
+        self.stored as f64 / (self.shape.0 as f64 * self.shape.1 as f64).max(1.0)
+    }
+}
+
+/// A hierarchical matrix.
+#[derive(Clone, Debug)]
+pub struct HMatrix {
+    row_order: Vec<usize>,
+    col_order: Vec<usize>,
+    leaves: Vec<Leaf>,
+    stats: HStats,
+}
+
+impl HMatrix {
+    /// Builds the matrix whose rows and columns have these boxes (a point's
+    /// box is the point; a basis function's, its support), sampling
+    /// `entries` (leaves in parallel; a sample of the admissible blocks
+    /// first, see [`HMatrix::build_checked`]).
+    pub fn build(
+        row_boxes: &[Aabb],
+        col_boxes: &[Aabb],
+        entries: &dyn Entries,
+        opts: &HOptions,
+    ) -> Self {
+        let built = Self::build_checked(row_boxes, col_boxes, entries, opts, |_| {
+            Ok::<(), std::convert::Infallible>(())
+        });
+        match built {
+            Ok((h, _)) => h,
+            Err(never) => match never {},
         }
     }
 
@@ -362,19 +363,23 @@ fn block_tree(
     }
 }
 
+/// The leaf of row cluster `r` and column cluster `c` (`zero`: proved zero
+/// by the structure).
+#[allow(clippy::too_many_arguments)]
 fn leaf(
     rt: &ClusterTree,
     ct: &ClusterTree,
     r: usize,
     c: usize,
     admissible: bool,
+    zero: bool,
     entries: &dyn Entries,
     tol: f64,
 ) -> Leaf {
     let (rc, cc) = (&rt.clusters[r], &ct.clusters[c]);
     let rows = &rt.order[rc.start..rc.end];
     let cols = &ct.order[cc.start..cc.end];
-    let data = if entries.is_zero(rows, &rc.bbox, cols, &cc.bbox) {
+    let data = if zero {
         LeafData::Zero
     } else if admissible {
         let (zero_rows, zero_cols) = entries.zero_lines(rows, cols);

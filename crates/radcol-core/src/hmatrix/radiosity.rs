@@ -5,7 +5,7 @@
 //! the plan culled (facing away, or hidden) zero without a kernel call.
 
 use super::cluster::Aabb;
-use super::{Entries, HMatrix, HOptions, HPrediction, Structure};
+use super::{Entries, HMatrix, HOptions, HPrediction, SampledSize, Structure};
 use crate::assembly::plan::{AssemblyPlan, PairClass};
 use crate::discretization::Discretization;
 use glam::DVec3;
@@ -53,6 +53,21 @@ impl<'a> PlanEntries<'a> {
     pub fn build(&self, opts: &HOptions) -> HMatrix {
         let (rows, cols) = self.boxes();
         HMatrix::build(&rows, &cols, self, opts)
+    }
+
+    /// The hierarchical matrix of the plan, with its size predicted from a
+    /// sample of its blocks and passed to `check` before the rest are
+    /// computed ([`HMatrix::build_checked`]).
+    ///
+    /// # Errors
+    /// What `check` returns.
+    pub fn build_checked<E>(
+        &self,
+        opts: &HOptions,
+        check: impl FnOnce(&SampledSize) -> Result<(), E>,
+    ) -> Result<(HMatrix, SampledSize), E> {
+        let (rows, cols) = self.boxes();
+        HMatrix::build_checked(&rows, &cols, self, opts, check)
     }
 }
 

@@ -60,6 +60,10 @@ pub struct OperatorDecision {
     /// occluded scenes it is the closer (low-rank blocks still counted at
     /// rank 1); None when dense.
     pub planned_bytes: Option<f64>,
+    /// The same predicted a third time from a sample of the admissible
+    /// blocks, built first ([`crate::hmatrix::SampledSize`]): the
+    /// prediction that knows ranks; None when dense.
+    pub sampled_bytes: Option<crate::hmatrix::SampledSize>,
 }
 
 /// Rows of the dense matrix computed to check a compressed operator.
@@ -75,6 +79,7 @@ impl OperatorDecision {
             sampled_error: None,
             predicted_bytes: None,
             planned_bytes: None,
+            sampled_bytes: None,
         }
     }
 }
@@ -105,6 +110,7 @@ pub fn decide(
             sampled_error: None,
             predicted_bytes: None,
             planned_bytes: None,
+            sampled_bytes: None,
         })
     };
     match (cfg.operator, cfg.solver) {
@@ -130,6 +136,7 @@ pub fn decide(
             sampled_error: None,
             predicted_bytes: None,
             planned_bytes: None,
+            sampled_bytes: None,
         }),
         (OperatorChoice::Auto, SolverKind::Gmres) => decision(
             OperatorKind::Compressed,
@@ -226,6 +233,7 @@ pub(crate) fn lighter_than_dense(
         sampled_error: None,
         predicted_bytes: Some(p.bytes()),
         planned_bytes: None,
+        sampled_bytes: None,
     })
 }
 
@@ -269,14 +277,16 @@ fn count_limit(available: Option<u64>) -> f64 {
 
 /// Builds the compressed operator from `plan`'s integrators, measures its
 /// product error at [`SAMPLED_ROWS`] rows into `decision`, and puts its
-/// size into `memory`; returns it with its kernel evaluations. Before any
-/// block is computed its size is predicted again from the plan (occlusion
-/// included), into `decision` and `memory`. When `cfg.check_memory`, a
-/// peak that does not fit is refused then, and again once the operator is
-/// built.
+/// predicted size into `memory`; returns it with its kernel evaluations.
+/// Its size is predicted twice before it is built: from the plan before
+/// any block is computed (occlusion's dense leaves exactly, low-rank blocks
+/// at rank 1), then from a sample of the admissible blocks built first
+/// ([`crate::hmatrix::SampledSize`]), which is what `memory` keeps. When
+/// `cfg.check_memory`, a peak that does not fit is refused at each of the
+/// two, and again once the operator is built.
 ///
 /// # Errors
-/// [`InputError::PeakTooLarge`] from the plan's prediction,
+/// [`InputError::PeakTooLarge`] from either prediction,
 /// [`InputError::CompressedTooLarge`] once built.
 pub(crate) fn build_compressed(
     plan: &AssemblyPlan,
@@ -294,10 +304,15 @@ pub(crate) fn build_compressed(
     if cfg.check_memory {
         memory.check(available)?;
     }
-    let h = entries.build(&cfg.compression);
+    let (h, sampled) = entries.build_checked(&cfg.compression, |s| {
+        *memory = memory.with_matrix(Some(s.bytes));
+        match cfg.check_memory {
+            true => memory.check(available),
+            false => Ok(()),
+        }
+    })?;
+    decision.sampled_bytes = Some(sampled);
     decision.sampled_error = Some(h.sampled_error(&entries, SAMPLED_ROWS));
-    // Not predicted again: the resident set now holds the operator.
-    *memory = memory.with_matrix(Some(h.heap_bytes() as f64));
     if cfg.check_memory {
         memory.check_compressed(&h, available_memory())?;
     }
