@@ -19,12 +19,13 @@
 
 pub mod aca;
 pub mod cluster;
+mod leaf;
 mod predict;
 pub mod radiosity;
 mod sample;
 
-use aca::{aca_plus, recompress, Cross, LowRank};
 use cluster::{Aabb, ClusterTree};
+use leaf::{dense_leaf_numbers, leaf, Leaf, LeafData};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::ops::ControlFlow;
@@ -90,22 +91,6 @@ impl Default for HOptions {
     }
 }
 
-/// One leaf of the block tree: ranges of the row and column orders.
-#[derive(Clone, Debug)]
-struct Leaf {
-    rows: std::ops::Range<usize>,
-    cols: std::ops::Range<usize>,
-    data: LeafData,
-}
-
-#[derive(Clone, Debug)]
-enum LeafData {
-    Zero,
-    /// Row-major.
-    Dense(Vec<f64>),
-    LowRank(LowRank),
-}
-
 /// What the matrix holds, for reports and tests.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct HStats {
@@ -137,20 +122,19 @@ impl HStats {
         };
         for (l, &admissible) in leaves.iter().zip(admissible) {
             let (m, n) = (l.rows.len() as u64, l.cols.len() as u64);
+            stats.stored += l.data.stored(l.rows.len(), l.cols.len());
             match &l.data {
                 LeafData::Zero => {
                     stats.zero_blocks += 1;
                     stats.zero_entries += m * n;
                 }
-                LeafData::Dense(_) => {
+                LeafData::Dense(_) | LeafData::Compact(_) => {
                     stats.dense_blocks += 1;
                     stats.low_rank_failed += admissible as usize;
-                    stats.stored += m * n;
                 }
                 LeafData::LowRank(lr) => {
                     stats.low_rank_blocks += 1;
                     stats.max_rank = stats.max_rank.max(lr.rank());
-                    stats.stored += (m + n) * lr.rank() as u64;
                 }
             }
         }
@@ -284,23 +268,6 @@ impl HMatrix {
     }
 }
 
-impl Leaf {
-    fn apply_add(&self, xp: &[f64], yp: &mut [f64]) {
-        let x = &xp[self.cols.clone()];
-        let y = &mut yp[self.rows.clone()];
-        match &self.data {
-            LeafData::Zero => {}
-            LeafData::Dense(a) => {
-                let n = x.len();
-                for (yi, row) in y.iter_mut().zip(a.chunks_exact(n)) {
-                    *yi += row.iter().zip(x).map(|(a, b)| a * b).sum::<f64>();
-                }
-            }
-            LeafData::LowRank(lr) => lr.apply_add(x, y),
-        }
-    }
-}
-
 /// A visitor of block-tree leaves: (row tree, column tree, row cluster,
 /// column cluster, admissible).
 type Visit<'a> = dyn FnMut(&ClusterTree, &ClusterTree, usize, usize, bool) -> ControlFlow<()> + 'a;
@@ -361,63 +328,6 @@ fn block_tree(
             .iter()
             .try_for_each(|&r| cs.iter().try_for_each(|&c| recurse(r, c))),
     }
-}
-
-/// The leaf of row cluster `r` and column cluster `c` (`zero`: proved zero
-/// by the structure).
-#[allow(clippy::too_many_arguments)]
-fn leaf(
-    rt: &ClusterTree,
-    ct: &ClusterTree,
-    r: usize,
-    c: usize,
-    admissible: bool,
-    zero: bool,
-    entries: &dyn Entries,
-    tol: f64,
-) -> Leaf {
-    let (rc, cc) = (&rt.clusters[r], &ct.clusters[c]);
-    let rows = &rt.order[rc.start..rc.end];
-    let cols = &ct.order[cc.start..cc.end];
-    let data = if zero {
-        LeafData::Zero
-    } else if admissible {
-        let (zero_rows, zero_cols) = entries.zero_lines(rows, cols);
-        let live = |idx: &[usize], zero: &[bool]| -> Vec<usize> {
-            (0..idx.len()).filter(|&a| !zero[a]).collect()
-        };
-        let (lr, lc) = (live(rows, &zero_rows), live(cols, &zero_cols));
-        let (sub_rows, sub_cols): (Vec<usize>, Vec<usize>) = (
-            lr.iter().map(|&a| rows[a]).collect(),
-            lc.iter().map(|&b| cols[b]).collect(),
-        );
-        let cross = aca_plus(
-            sub_rows.len(),
-            sub_cols.len(),
-            tol,
-            &mut |i, out| entries.block(&sub_rows[i..i + 1], &sub_cols, out),
-            &mut |j, out| entries.block(&sub_rows, &sub_cols[j..j + 1], out),
-        );
-        match cross {
-            Cross::LowRank(l) => {
-                LeafData::LowRank(recompress(&l, tol).padded(rows.len(), &lr, cols.len(), &lc))
-            }
-            Cross::Dense => dense(rows, cols, entries),
-        }
-    } else {
-        dense(rows, cols, entries)
-    };
-    Leaf {
-        rows: rc.start..rc.end,
-        cols: cc.start..cc.end,
-        data,
-    }
-}
-
-fn dense(rows: &[usize], cols: &[usize], entries: &dyn Entries) -> LeafData {
-    let mut a = vec![0.0; rows.len() * cols.len()];
-    entries.block(rows, cols, &mut a);
-    LeafData::Dense(a)
 }
 
 impl crate::solve::LinearOperator for HMatrix {

@@ -3,16 +3,18 @@
 //! hours its entries would take.
 
 use super::cluster::Aabb;
-use super::{partition, HMatrix, HOptions, Leaf, Structure};
+use super::{dense_leaf_numbers, partition, HMatrix, HOptions, Leaf, Structure};
 use serde::Serialize;
 use std::ops::ControlFlow;
 
 /// The bytes a hierarchical matrix will take: its dense leaves exactly
-/// (those the structure does not prove zero), its low-rank leaves at rank 1
+/// (those the structure does not prove zero, without the rows and columns
+/// it proves zero), its low-rank leaves at rank 1
 /// (at least that; most are higher), and its orders and leaf records.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct HPrediction {
-    /// Bytes of the dense leaves: 8 m n each.
+    /// Bytes of the dense leaves: 8 m n each, or less where the structure
+    /// proves rows and columns zero.
     pub near_bytes: f64,
     /// Bytes of the admissible leaves at rank 1: 8 (m + n) each.
     pub far_min_bytes: f64,
@@ -67,7 +69,8 @@ impl HMatrix {
                     &ct.order[cc.start..cc.end],
                     &cc.bbox,
                 ) {
-                    p.near_bytes += 8.0 * m * n;
+                    p.near_bytes +=
+                        8.0 * dense_leaf_numbers(&rt.order, rc, &ct.order, cc, structure) as f64;
                 }
                 if p.bytes() > limit {
                     ControlFlow::Break(())
@@ -113,5 +116,69 @@ mod tests {
         let stopped = HMatrix::predict(&boxes, &boxes, &m, &opts, 0.5 * p.bytes());
         assert!(!stopped.complete);
         assert!(stopped.bytes() > 0.5 * p.bytes() && stopped.bytes() < p.bytes());
+    }
+
+    /// The rank-1 matrix above with every fifth row and every seventh
+    /// column zero, which its structure says: dense leaves store the other
+    /// lines only, the product is the dense one's, the prediction is still
+    /// exact, and less is stored than when the structure says nothing.
+    #[test]
+    fn rows_and_columns_proved_zero_are_not_stored() {
+        struct Lines(DenseMatrix, bool);
+        impl Structure for Lines {
+            fn zero_lines(&self, rows: &[usize], cols: &[usize]) -> (Vec<bool>, Vec<bool>) {
+                let said = self.1;
+                (
+                    rows.iter().map(|&i| said && i % 5 == 0).collect(),
+                    cols.iter().map(|&j| said && j % 7 == 0).collect(),
+                )
+            }
+        }
+        impl crate::hmatrix::Entries for Lines {
+            fn block(&self, rows: &[usize], cols: &[usize], out: &mut [f64]) {
+                self.0.block(rows, cols, out)
+            }
+        }
+        let n = 700;
+        let boxes: Vec<Aabb> = (0..n)
+            .map(|k| {
+                let t = k as f64 * 0.05;
+                let p = DVec3::new(t.cos(), t.sin(), 0.1 * t);
+                Aabb { lo: p, hi: p }
+            })
+            .collect();
+        let a = |i: usize| 1.0 + (i as f64 * 0.37).sin().abs();
+        let data = (0..n * n)
+            .map(|k| {
+                let (i, j) = (k / n, k % n);
+                if i % 5 == 0 || j % 7 == 0 {
+                    0.0
+                } else {
+                    a(i) * a(j + 3)
+                }
+            })
+            .collect();
+        let opts = HOptions::default();
+        let said = Lines(DenseMatrix::from_row_major(n, n, data), true);
+        let h = HMatrix::build(&boxes, &boxes, &said, &opts);
+        let p = HMatrix::predict(&boxes, &boxes, &said, &opts, f64::INFINITY);
+        assert_eq!(p.bytes(), h.heap_bytes() as f64, "{p:?}");
+        let unsaid = Lines(said.0.clone(), false);
+        let whole = HMatrix::build(&boxes, &boxes, &unsaid, &opts);
+        let s = h.stats();
+        assert!(s.dense_blocks > 10, "{s:?}");
+        assert!(
+            (s.stored as f64) < 0.8 * whole.stats().stored as f64,
+            "{s:?} against {:?}",
+            whole.stats()
+        );
+        let x: Vec<f64> = (0..n).map(|k| (k as f64 * 0.61).cos()).collect();
+        let (mut y, mut exact) = (vec![0.0; n], vec![0.0; n]);
+        h.matvec(&x, &mut y);
+        crate::solve::LinearOperator::apply(&said.0, &x, &mut exact);
+        let scale = exact.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (u, v) in y.iter().zip(&exact) {
+            assert!((u - v).abs() <= 1e-12 * scale, "{u} against {v}");
+        }
     }
 }

@@ -147,20 +147,47 @@ impl Structure for PlanEntries<'_> {
         planes_clear(disc, rows, row_box, cols, col_box) && self.cross(rows, cols).is_some()
     }
 
+    /// The rows of the row elements, and the columns of the column
+    /// elements, whose pairs with every element of the other side are
+    /// culled ([`Self::culled`]).
     fn zero_lines(&self, rows: &[usize], cols: &[usize]) -> (Vec<bool>, Vec<bool>) {
         let f_rows = self.plan.rows().nodes_per_element();
         let f = self.plan.discretization().nodes_per_element();
-        match self.cross(rows, cols) {
-            Some((zr, zc)) => (
-                rows.iter()
-                    .map(|&i| zr.binary_search(&(i / f_rows)).is_ok())
-                    .collect(),
-                cols.iter()
-                    .map(|&j| zc.binary_search(&(j / f)).is_ok())
-                    .collect(),
-            ),
-            None => (vec![false; rows.len()], vec![false; cols.len()]),
-        }
+        let c = self.culled(rows, cols);
+        let zero_cols = c.zero_cols();
+        (
+            rows.iter()
+                .map(|&i| c.zero_rows.binary_search(&(i / f_rows)).is_ok())
+                .collect(),
+            cols.iter()
+                .map(|&j| zero_cols.binary_search(&(j / f)).is_ok())
+                .collect(),
+        )
+    }
+}
+
+/// The culled pairs of a block, by element.
+struct Culled {
+    /// The block's row and column elements, sorted.
+    row_elems: Vec<usize>,
+    col_elems: Vec<usize>,
+    /// The row elements whose every pair is culled (sorted).
+    zero_rows: Vec<usize>,
+    /// Per column element, its culled pairs.
+    culled_in_col: Vec<usize>,
+    /// Some pair is partly visible.
+    partial: bool,
+}
+
+impl Culled {
+    /// The column elements whose every pair is culled (sorted).
+    fn zero_cols(&self) -> Vec<usize> {
+        self.col_elems
+            .iter()
+            .zip(&self.culled_in_col)
+            .filter(|&(_, &c)| c == self.row_elems.len())
+            .map(|(&k, _)| k)
+            .collect()
     }
 }
 
@@ -181,52 +208,56 @@ impl PlanEntries<'_> {
     /// With no partly visible pair and the culled pairs filling whole rows
     /// and columns of elements: those row and column elements (sorted).
     fn cross(&self, rows: &[usize], cols: &[usize]) -> Option<(Vec<usize>, Vec<usize>)> {
-        let (row_elems, col_elems) = self.elements(rows, cols);
-        // Culled pairs per column element; rows wholly culled.
-        let mut culled_in_col = vec![0usize; col_elems.len()];
-        let mut zero_rows = Vec::new();
-        let mut some_culled = false;
-        let mut partial = false;
-        let classes = self.plan.classes();
-        let (first, last) = (*col_elems.first()?, *col_elems.last()?);
-        for &kp in &row_elems {
-            let (mut c, mut all) = (0, true);
-            let mut cols = col_elems.iter().enumerate().peekable();
-            for (run, code) in classes.runs(kp, first..last + 1) {
-                while let Some((b, _)) = cols.next_if(|&(_, &k)| k < run.end) {
-                    match PairClass::from_code(code) {
-                        PairClass::Partial => partial = true,
-                        PairClass::Culled => {
-                            culled_in_col[b] += 1;
-                            c += 1;
-                        }
-                        _ => all = false,
-                    }
-                }
-            }
-            if partial {
-                return None;
-            }
-            some_culled |= c > 0;
-            if all {
-                zero_rows.push(kp);
-            }
-        }
-        let zero_cols: Vec<usize> = col_elems
-            .iter()
-            .zip(&culled_in_col)
-            .filter(|&(_, &c)| c == row_elems.len())
-            .map(|(&k, _)| k)
-            .collect();
-        if !some_culled {
-            return Some((zero_rows, zero_cols));
+        let c = self.culled(rows, cols);
+        if c.partial {
+            return None;
         }
         // Every culled pair lies in a zero row or a zero column: a column's
         // culled pairs outside the zero rows number none unless it is zero.
-        let crossing = culled_in_col
+        let crossing = c
+            .culled_in_col
             .iter()
-            .all(|&c| c == row_elems.len() || c == zero_rows.len());
-        crossing.then_some((zero_rows, zero_cols))
+            .all(|&k| k == c.row_elems.len() || k == c.zero_rows.len());
+        crossing.then(|| {
+            let zero_cols = c.zero_cols();
+            (c.zero_rows, zero_cols)
+        })
+    }
+
+    /// The block's culled pairs by row and column element (a byte lookup
+    /// per pair: no kernel call).
+    fn culled(&self, rows: &[usize], cols: &[usize]) -> Culled {
+        let (row_elems, col_elems) = self.elements(rows, cols);
+        let mut c = Culled {
+            zero_rows: Vec::new(),
+            culled_in_col: vec![0usize; col_elems.len()],
+            partial: false,
+            row_elems: Vec::new(),
+            col_elems: Vec::new(),
+        };
+        let classes = self.plan.classes();
+        if let (Some(&first), Some(&last)) = (col_elems.first(), col_elems.last()) {
+            for &kp in &row_elems {
+                let mut all = true;
+                let mut cols = col_elems.iter().enumerate().peekable();
+                for (run, code) in classes.runs(kp, first..last + 1) {
+                    while let Some((b, _)) = cols.next_if(|&(_, &k)| k < run.end) {
+                        match PairClass::from_code(code) {
+                            PairClass::Partial => c.partial = true,
+                            PairClass::Culled => c.culled_in_col[b] += 1,
+                            _ => {}
+                        }
+                        all &= PairClass::from_code(code) == PairClass::Culled;
+                    }
+                }
+                if all {
+                    c.zero_rows.push(kp);
+                }
+            }
+        }
+        c.row_elems = row_elems;
+        c.col_elems = col_elems;
+        c
     }
 
     /// True when every element pair of the block has a class for which `ok`
@@ -427,6 +458,35 @@ impl Structure for Geometry<'_> {
 
     fn smooth(&self, rows: &[usize], row_box: &Aabb, cols: &[usize], col_box: &Aabb) -> bool {
         planes_clear(self.disc, rows, row_box, cols, col_box)
+    }
+
+    /// A flat column element's columns are zero when every row point lies
+    /// on or behind its plane; a row is zero when it lies on or behind the
+    /// plane of every column element (all flat). The test of
+    /// [`Structure::is_zero`] line by line.
+    fn zero_lines(&self, rows: &[usize], cols: &[usize]) -> (Vec<bool>, Vec<bool>) {
+        let pts = self.disc.points();
+        let f = self.disc.nodes_per_element();
+        let elems = column_elements(self.disc, cols);
+        let behind = |i: usize, k: usize| {
+            self.plane_of[k].is_some_and(|id| {
+                let (d, c) = (self.normals[id].dot(pts[i].position), self.offset[k]);
+                d - c <= COPLANAR * (d.abs() + c.abs())
+            })
+        };
+        let zero_elems: Vec<usize> = elems
+            .iter()
+            .copied()
+            .filter(|&k| rows.iter().all(|&i| behind(i, k)))
+            .collect();
+        (
+            rows.iter()
+                .map(|&i| elems.iter().all(|&k| behind(i, k)))
+                .collect(),
+            cols.iter()
+                .map(|&j| zero_elems.contains(&(j / f)))
+                .collect(),
+        )
     }
 }
 

@@ -5,10 +5,14 @@
 //! from the sample, by block size. What a low-rank block stores (its rank,
 //! or all of it when its cross does not pay) is known only once it is
 //! computed, which is why counts over the block tree alone
-//! ([`HMatrix::predict`]) fall short of what is built.
+//! ([`HMatrix::predict`]) fall short of what is built. The dense leaves are
+//! counted with the rows and columns their structure proves zero left out,
+//! as they are stored.
 
-use super::cluster::Aabb;
-use super::{leaf, partition, Entries, HMatrix, HOptions, HStats, Leaf, LeafData};
+use super::cluster::{Aabb, ClusterTree};
+use super::{
+    dense_leaf_numbers, leaf, partition, Entries, HMatrix, HOptions, HStats, Leaf, Structure,
+};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -51,15 +55,61 @@ impl HMatrix {
         opts: &HOptions,
         check: impl FnOnce(&SampledSize) -> Result<(), E>,
     ) -> Result<(Self, SampledSize), E> {
+        let t = Blocks::new(row_boxes, col_boxes, entries, opts);
+        let classes = t.classes();
+        let sample: Vec<usize> = classes.values().flat_map(|c| systematic(c)).collect();
+        let make = |b: usize| {
+            let (r, c, a) = t.blocks[b];
+            leaf(&t.rt, &t.ct, r, c, a, t.zero[b], entries, opts.tol)
+        };
+        let built: Vec<Leaf> = sample.par_iter().map(|&b| make(b)).collect();
+        let size = t.predict(&classes, &built, entries);
+        check(&size)?;
+        let mut leaves: Vec<Option<Leaf>> = vec![None; t.blocks.len()];
+        for (&b, l) in sample.iter().zip(built) {
+            leaves[b] = Some(l);
+        }
+        let rest: Vec<usize> = (0..t.blocks.len())
+            .filter(|&b| leaves[b].is_none())
+            .collect();
+        let rest_built: Vec<Leaf> = rest.par_iter().map(|&b| make(b)).collect();
+        for (b, l) in rest.into_iter().zip(rest_built) {
+            leaves[b] = Some(l);
+        }
+        let leaves: Vec<Leaf> = leaves
+            .into_iter()
+            .map(|l| l.expect("every block built"))
+            .collect();
+        let admissible: Vec<bool> = t.blocks.iter().map(|b| b.2).collect();
+        let stats = HStats::of(&leaves, &admissible, (row_boxes.len(), col_boxes.len()));
+        let h = Self {
+            row_order: t.rt.order,
+            col_order: t.ct.order,
+            leaves,
+            stats,
+        };
+        Ok((h, size))
+    }
+}
+
+/// The block tree's leaves, before any is built.
+struct Blocks {
+    rt: ClusterTree,
+    ct: ClusterTree,
+    /// (row cluster, column cluster, admissible).
+    blocks: Vec<(usize, usize, bool)>,
+    /// Proved zero by the structure.
+    zero: Vec<bool>,
+}
+
+impl Blocks {
+    fn new(row_boxes: &[Aabb], col_boxes: &[Aabb], entries: &dyn Entries, opts: &HOptions) -> Self {
         let mut blocks = Vec::new();
         let (rt, ct, _) = partition(row_boxes, col_boxes, entries, opts, &mut |_, _, r, c, a| {
             blocks.push((r, c, a));
             ControlFlow::Continue(())
         });
-        let shape = |&(r, c, _): &(usize, usize, bool)| {
-            (rt.clusters[r].len() as u64, ct.clusters[c].len() as u64)
-        };
-        let zero: Vec<bool> = blocks
+        let zero = blocks
             .par_iter()
             .map(|&(r, c, _)| {
                 let (rc, cc) = (&rt.clusters[r], &ct.clusters[c]);
@@ -71,81 +121,74 @@ impl HMatrix {
                 )
             })
             .collect();
-        // Admissible, non-zero blocks by size class (log2 of m n), in block
-        // order: neighbours in the order are neighbours in space.
+        Self {
+            rt,
+            ct,
+            blocks,
+            zero,
+        }
+    }
+
+    /// Entries of block `b`.
+    fn entries(&self, b: usize) -> f64 {
+        let (r, c, _) = self.blocks[b];
+        (self.rt.clusters[r].len() * self.ct.clusters[c].len()) as f64
+    }
+
+    /// Admissible, non-zero blocks by size class (log2 of m n), in block
+    /// order: neighbours in the order are neighbours in space.
+    fn classes(&self) -> BTreeMap<u32, Vec<usize>> {
         let mut classes: BTreeMap<u32, Vec<usize>> = BTreeMap::new();
-        for (b, blk) in blocks.iter().enumerate() {
-            if blk.2 && !zero[b] {
-                let (m, n) = shape(blk);
-                classes.entry((m * n).max(1).ilog2()).or_default().push(b);
+        for (b, blk) in self.blocks.iter().enumerate() {
+            if blk.2 && !self.zero[b] {
+                let class = (self.entries(b) as u64).max(1).ilog2();
+                classes.entry(class).or_default().push(b);
             }
         }
-        let sample: Vec<usize> = classes.values().flat_map(|c| systematic(c)).collect();
-        let make = |b: usize| {
-            let (r, c, a) = blocks[b];
-            leaf(&rt, &ct, r, c, a, zero[b], entries, opts.tol)
-        };
-        let built: Vec<Leaf> = sample.par_iter().map(|&b| make(b)).collect();
-        let mut fixed = 8.0 * (row_boxes.len() + col_boxes.len()) as f64
-            + (blocks.len() * std::mem::size_of::<Leaf>()) as f64;
-        for (b, blk) in blocks.iter().enumerate() {
-            if !blk.2 && !zero[b] {
-                let (m, n) = shape(blk);
-                fixed += 8.0 * (m * n) as f64;
-            }
-        }
-        let mut at = 0;
-        let (mut predicted, mut sampled_entries, mut admissible_entries) = (fixed, 0.0, 0.0);
+        classes
+    }
+
+    /// The size predicted from `built`, the sample of `classes` in their
+    /// order: orders, leaf records and dense leaves exactly, each class by
+    /// the sample's stored share of its entries.
+    fn predict(
+        &self,
+        classes: &BTreeMap<u32, Vec<usize>>,
+        built: &[Leaf],
+        structure: &dyn Structure,
+    ) -> SampledSize {
+        let dense: u64 = self
+            .blocks
+            .par_iter()
+            .zip(&self.zero)
+            .filter(|&(blk, &z)| !blk.2 && !z)
+            .map(|(&(r, c, _), _)| {
+                let (rc, cc) = (&self.rt.clusters[r], &self.ct.clusters[c]);
+                dense_leaf_numbers(&self.rt.order, rc, &self.ct.order, cc, structure)
+            })
+            .sum();
+        let mut bytes = 8.0 * (self.rt.order.len() + self.ct.order.len() + dense as usize) as f64
+            + (self.blocks.len() * std::mem::size_of::<Leaf>()) as f64;
+        let (mut at, mut seen_all, mut all) = (0, 0.0, 0.0);
         for members in classes.values() {
-            let k = systematic(members).len();
-            let part = &built[at..at + k];
-            at += k;
-            let entries_of = |l: &Leaf| (l.rows.len() * l.cols.len()) as f64;
+            let part = &built[at..at + systematic(members).len()];
+            at += part.len();
             let stored: f64 = part.iter().map(|l| l.stored() as f64).sum();
-            let seen: f64 = part.iter().map(entries_of).sum();
-            let all: f64 = members
+            let seen: f64 = part
                 .iter()
-                .map(|&b| {
-                    let (m, n) = shape(&blocks[b]);
-                    (m * n) as f64
-                })
+                .map(|l| (l.rows.len() * l.cols.len()) as f64)
                 .sum();
-            predicted += 8.0 * stored / seen * all;
-            sampled_entries += seen;
-            admissible_entries += all;
+            let class: f64 = members.iter().map(|&b| self.entries(b)).sum();
+            bytes += 8.0 * stored / seen * class;
+            seen_all += seen;
+            all += class;
         }
-        let size = SampledSize {
-            bytes: predicted,
-            sampled_blocks: sample.len(),
+        SampledSize {
+            bytes,
+            sampled_blocks: at,
             admissible_blocks: classes.values().map(Vec::len).sum(),
-            sampled_entries: sampled_entries / admissible_entries.max(1.0),
-        };
-        check(&size)?;
-        let mut in_sample = vec![false; blocks.len()];
-        sample.iter().for_each(|&b| in_sample[b] = true);
-        let rest: Vec<usize> = (0..blocks.len()).filter(|&b| !in_sample[b]).collect();
-        let rest_built: Vec<Leaf> = rest.par_iter().map(|&b| make(b)).collect();
-        let mut leaves: Vec<Option<Leaf>> = vec![None; blocks.len()];
-        for (b, l) in sample
-            .into_iter()
-            .zip(built)
-            .chain(rest.into_iter().zip(rest_built))
-        {
-            leaves[b] = Some(l);
+            sampled_entries: seen_all / all.max(1.0),
         }
-        let leaves: Vec<Leaf> = leaves
-            .into_iter()
-            .map(|l| l.expect("every block built"))
-            .collect();
-        let admissible: Vec<bool> = blocks.iter().map(|b| b.2).collect();
-        let stats = HStats::of(&leaves, &admissible, (row_boxes.len(), col_boxes.len()));
-        let h = Self {
-            row_order: rt.order,
-            col_order: ct.order,
-            leaves,
-            stats,
-        };
-        Ok((h, size))
     }
 }
 
@@ -160,12 +203,7 @@ fn systematic(members: &[usize]) -> Vec<usize> {
 impl Leaf {
     /// Numbers stored.
     fn stored(&self) -> u64 {
-        let (m, n) = (self.rows.len() as u64, self.cols.len() as u64);
-        match &self.data {
-            LeafData::Zero => 0,
-            LeafData::Dense(_) => m * n,
-            LeafData::LowRank(lr) => (m + n) * lr.rank() as u64,
-        }
+        self.data.stored(self.rows.len(), self.cols.len())
     }
 }
 
