@@ -90,20 +90,31 @@ mod tests {
     use crate::matrix::DenseMatrix;
     use glam::DVec3;
 
-    /// Points on a helix, and the rank-1 matrix a_i b_j over them: every
-    /// admissible block has rank 1 exactly, so the prediction is the
-    /// built matrix's size to the byte; a limit stops the count past it.
-    #[test]
-    fn a_rank_one_matrix_is_predicted_exactly() {
-        let n = 700;
-        let boxes: Vec<Aabb> = (0..n)
+    /// Points on the helix.
+    const HELIX: usize = 700;
+
+    /// The boxes of `HELIX` points on a helix.
+    fn helix() -> Vec<Aabb> {
+        (0..HELIX)
             .map(|k| {
                 let t = k as f64 * 0.05;
                 let p = DVec3::new(t.cos(), t.sin(), 0.1 * t);
                 Aabb { lo: p, hi: p }
             })
-            .collect();
-        let a = |i: usize| 1.0 + (i as f64 * 0.37).sin().abs();
+            .collect()
+    }
+
+    /// The factors a_i of a rank-1 matrix a_i a_(j+3).
+    fn a(i: usize) -> f64 {
+        1.0 + (i as f64 * 0.37).sin().abs()
+    }
+
+    /// Points on a helix, and the rank-1 matrix a_i b_j over them: every
+    /// admissible block has rank 1 exactly, so the prediction is the
+    /// built matrix's size to the byte; a limit stops the count past it.
+    #[test]
+    fn a_rank_one_matrix_is_predicted_exactly() {
+        let (n, boxes) = (HELIX, helix());
         let data = (0..n * n).map(|k| a(k / n) * a(k % n + 3)).collect();
         let m = DenseMatrix::from_row_major(n, n, data);
         let opts = HOptions::default();
@@ -139,15 +150,7 @@ mod tests {
                 self.0.block(rows, cols, out)
             }
         }
-        let n = 700;
-        let boxes: Vec<Aabb> = (0..n)
-            .map(|k| {
-                let t = k as f64 * 0.05;
-                let p = DVec3::new(t.cos(), t.sin(), 0.1 * t);
-                Aabb { lo: p, hi: p }
-            })
-            .collect();
-        let a = |i: usize| 1.0 + (i as f64 * 0.37).sin().abs();
+        let (n, boxes) = (HELIX, helix());
         let data = (0..n * n)
             .map(|k| {
                 let (i, j) = (k / n, k % n);
