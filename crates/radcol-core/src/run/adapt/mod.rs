@@ -252,15 +252,13 @@ pub fn solve_adaptive(
         let frozen = |k: usize| smallest(k) || History::stalled(k, &stalls, opts.stall_generations);
         let mut step = describe(&out, &indicator, &negative, &frozen, opts);
         step.seconds = t.elapsed().as_secs_f64();
-        let (stop, marked, split) = decide(
-            opts,
-            &cfg,
-            step.estimate,
-            steps.len() + 1,
-            &indicator,
-            &frozen,
-            f,
-        );
+        let marking = Marking {
+            indicator: &indicator,
+            frozen: &frozen,
+            // One more stalled split freezes these.
+            stalling: &|k| stalls[k] > 0 && stalls[k] + 1 >= opts.stall_generations,
+        };
+        let (stop, marked, split) = decide(opts, &cfg, step.estimate, steps.len() + 1, &marking, f);
         step.split = split;
         on_step(&step);
         steps.push(step);
@@ -315,16 +313,33 @@ fn unchanged_of(parents: &[usize], split: &[bool]) -> Unchanged {
     Unchanged::new(&old_of, split.len())
 }
 
+/// What marking knows of each element: its `indicator`, whether it is
+/// `frozen` (not split any more), and whether it is `stalling`: one more
+/// split that does not lower its estimate below [`STALL_RATIO`] of its
+/// parent's would freeze it.
+struct Marking<'a> {
+    indicator: &'a [f64],
+    frozen: &'a dyn Fn(usize) -> bool,
+    stalling: &'a dyn Fn(usize) -> bool,
+}
+
 /// Whether the loop stops after its `step`-th step (estimate `estimate`),
 /// the elements marked for splitting (worst first) and how many of them the
-/// budget lets split.
+/// budget lets split. Marked: the splittable elements above both
+/// `mark_fraction · target` and `max_fraction` of the worst splittable
+/// element that is not stalling. Stalling elements above that are split in
+/// the same step: measured against the worst of them, steps split only the
+/// few on their way to being frozen (on the Cornell box to 1e-4, steps of
+/// 2, 50 and 71 of 12 600 elements, two minutes each; to 1e-3, 12 steps
+/// against 11 now, to the same mesh). Setting aside every element whose
+/// last split stalled went too far: the shadow family's square occluder
+/// took 18 117 unknowns to 1e-3 instead of 12 339.
 fn decide(
     opts: &AdaptOptions,
     cfg: &SolveConfig,
     estimate: f64,
     step: usize,
-    indicator: &[f64],
-    frozen: &dyn Fn(usize) -> bool,
+    m: &Marking<'_>,
     f: usize,
 ) -> (Option<StopReason>, Vec<usize>, usize) {
     let stop = if estimate <= opts.target {
@@ -337,15 +352,19 @@ fn decide(
     let marked = match stop {
         Some(_) => Vec::new(),
         None => {
-            let worst = splittable_max(indicator, frozen);
+            let set_aside = |k: usize| (m.frozen)(k) || (m.stalling)(k);
+            let worst = match splittable_max(m.indicator, &set_aside) {
+                w if w > 0.0 => w,
+                _ => splittable_max(m.indicator, m.frozen),
+            };
             let threshold = (opts.mark_fraction * opts.target).max(opts.max_fraction * worst);
-            mark(indicator, threshold, frozen)
+            mark(m.indicator, threshold, m.frozen)
         }
     };
     let stop = stop.or((marked.is_empty()).then_some(StopReason::Singular));
-    let budget = budget(opts, cfg, indicator.len(), f, marked.len());
+    let budget = budget(opts, cfg, m.indicator.len(), f, marked.len());
     let stop = stop.or(budget.err());
-    let split = budget.map_or(0, |m| m.min(marked.len()));
+    let split = budget.map_or(0, |n| n.min(marked.len()));
     (stop, marked, split)
 }
 

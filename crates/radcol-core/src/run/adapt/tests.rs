@@ -29,6 +29,38 @@ fn marking_skips_capped_elements() {
     assert!(mark(&ind, 0.15, &|_| true).is_empty());
 }
 
+/// The fraction of the worst element that sets the threshold is taken of
+/// the worst element that is not stalling (a stalled split away from being
+/// frozen): a stalling element far above the rest is split with them, not
+/// alone; when every splittable element is stalling, of the worst of those.
+#[test]
+fn a_stalling_element_does_not_set_the_threshold_alone() {
+    let opts = AdaptOptions {
+        target: 1e-4,
+        max_unknowns: Some(1_000_000),
+        ..Default::default()
+    };
+    let cfg = SolveConfig::default();
+    let ind = [8e-3, 4e-4, 3e-4, 1e-4, 6e-5, 2e-3];
+    let marked = |stalling: &dyn Fn(usize) -> bool, frozen: &dyn Fn(usize) -> bool| {
+        let m = Marking {
+            indicator: &ind,
+            frozen,
+            stalling,
+        };
+        decide(&opts, &cfg, 8e-3, 1, &m, 3).1
+    };
+    // Element 0 stalls: the threshold is 1/4 of element 5's 2e-3 (5e-4),
+    // and element 0 is split with element 5.
+    assert_eq!(marked(&|k| k == 0, &|_| false), vec![0, 5]);
+    // Element 5 frozen too: 1/4 of 4e-4, every element above 1e-4 split.
+    assert_eq!(marked(&|k| k == 0, &|k| k == 5), vec![0, 1, 2]);
+    // Nothing stalls: 1/4 of 8e-3 (2e-3) leaves element 0 alone.
+    assert_eq!(marked(&|_| false, &|_| false), vec![0]);
+    // Everything splittable stalls: measured against the worst of them.
+    assert_eq!(marked(&|_| true, &|_| false), vec![0]);
+}
+
 /// Targets outside (0, 1) and size floors outside [0, 1) are refused.
 #[test]
 fn options_out_of_range_are_refused() {
