@@ -228,36 +228,33 @@ impl PlanEntries<'_> {
     /// per pair: no kernel call).
     fn culled(&self, rows: &[usize], cols: &[usize]) -> Culled {
         let (row_elems, col_elems) = self.elements(rows, cols);
-        let mut c = Culled {
-            zero_rows: Vec::new(),
-            culled_in_col: vec![0usize; col_elems.len()],
-            partial: false,
-            row_elems: Vec::new(),
-            col_elems: Vec::new(),
-        };
+        let (mut zero_rows, mut culled_in_col) = (Vec::new(), vec![0usize; col_elems.len()]);
+        let mut partial = false;
         let classes = self.plan.classes();
         if let (Some(&first), Some(&last)) = (col_elems.first(), col_elems.last()) {
             for &kp in &row_elems {
                 let mut all = true;
                 let mut cols = col_elems.iter().enumerate().peekable();
                 for (run, code) in classes.runs(kp, first..last + 1) {
+                    let class = PairClass::from_code(code);
                     while let Some((b, _)) = cols.next_if(|&(_, &k)| k < run.end) {
-                        match PairClass::from_code(code) {
-                            PairClass::Partial => c.partial = true,
-                            PairClass::Culled => c.culled_in_col[b] += 1,
-                            _ => {}
-                        }
-                        all &= PairClass::from_code(code) == PairClass::Culled;
+                        partial |= class == PairClass::Partial;
+                        culled_in_col[b] += (class == PairClass::Culled) as usize;
+                        all &= class == PairClass::Culled;
                     }
                 }
                 if all {
-                    c.zero_rows.push(kp);
+                    zero_rows.push(kp);
                 }
             }
         }
-        c.row_elems = row_elems;
-        c.col_elems = col_elems;
-        c
+        Culled {
+            row_elems,
+            col_elems,
+            zero_rows,
+            culled_in_col,
+            partial,
+        }
     }
 
     /// True when every element pair of the block has a class for which `ok`
