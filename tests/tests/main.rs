@@ -19,6 +19,7 @@ mod gpu_select;
 mod gpu_solve;
 mod hmatrix;
 mod house;
+mod hp;
 mod operator;
 mod progress;
 mod query;

@@ -106,7 +106,7 @@ fn intersect(subject: &[DVec3], clip: &[DVec3]) -> Vec<DVec3> {
 }
 
 /// u on the floor at `p`: ρ (F(emitter) - F(emitter ∩ shadow of the occluder)).
-fn floor_u(case: &Case, p: DVec3) -> f64 {
+pub(crate) fn floor_u(case: &Case, p: DVec3) -> f64 {
     let n = DVec3::Z;
     let ze = case.emitter[0].z;
     let projected: Vec<DVec3> = case
