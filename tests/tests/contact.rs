@@ -188,9 +188,11 @@ fn adaptive_refinement_names_the_corners_where_it_stalls() {
 /// corners' feet until their elements are shorter than
 /// `AdaptOptions::min_size` of the scene's diagonal (the default, 1e-5), and
 /// the estimate does not rise on the way (rounding does not break the
-/// smallest elements: measured 8.51e-3, 8.76e-3 then falling to 8.65e-3 over
-/// 16 steps to 9 183 unknowns; without any limit it rose to 5e-2). The points named are
-/// the feet, every element there at the floor.
+/// smallest elements: measured 8.11e-3 at the third step, 7.52e-3 at the
+/// fourth as the feet's elements take the lead, then 8.07e-3 to within
+/// 0.1 % over the last nine of 16 steps, to 5 115 unknowns; without any
+/// limit it rose to 5e-2). The points named are the feet, every element
+/// there at the floor.
 #[test]
 fn the_size_floor_stops_the_loop_before_rounding_does() {
     let cfg = SolveConfig {
@@ -208,9 +210,14 @@ fn the_size_floor_stops_the_loop_before_rounding_does() {
     let res = solve_adaptive(&imprinted(), &cfg, &opts, &CpuBackend, |_| {}).unwrap();
     let last = res.steps.last().unwrap();
     assert_eq!(res.stop, StopReason::Singular, "{last:?}");
-    // From the third step on the feet's elements lead, and their estimate
-    // stays where it stalled.
+    // From the third step on the estimate never rises above where it
+    // stalls, and once the feet's elements lead (the last eight steps) it
+    // stays there.
     for s in &res.steps[2..] {
+        assert!(s.estimate <= 1.05 * last.estimate, "{:?}", res.steps);
+    }
+    assert!(res.steps.len() >= 12, "{:?}", res.steps);
+    for s in res.steps.iter().rev().take(8) {
         let ratio = s.estimate / last.estimate;
         assert!((0.95..=1.05).contains(&ratio), "{:?}", res.steps);
     }

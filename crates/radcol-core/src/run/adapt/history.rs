@@ -5,80 +5,89 @@
 //! vertical edges meet there, and the configuration is self-similar), the
 //! element touching the point keeps its max error under every split: its
 //! child touching the point sees the same range of directions. Elsewhere a
-//! split divides the max error by about 2^(r+1) where u is smooth, and still
-//! by about 2 next to a concave edge (u ~ x log x) or along a kink. So an
-//! element whose estimate stayed above [`STALL_RATIO`] of its parent's for
-//! `stall_generations` splits in a row is not split again (nor is one at the
-//! size floor, `AdaptOptions::min_size`), and the elements left above the
-//! target that way are gathered into the [`SingularPoint`]s the report
-//! names, with how many of them are at the floor.
+//! split divides the max error by about 2^(r+1) where u is smooth, and by
+//! about 2 next to a concave edge (u ~ x log x) or along a kink, on
+//! average: along a kink the factor of one split varies with where the
+//! line crosses the child (on the shadow family at r = 2, 0.55, 1.33 and
+//! 0.66 in a row, then the line left the chain's element). So an element
+//! whose estimate fell by less than [`STALL_RATIO`] per split on average
+//! over its last `stall_generations` splits is not split again (nor is one
+//! at the size floor, `AdaptOptions::min_size`), and the elements left
+//! above the target that way are gathered into the [`SingularPoint`]s the
+//! report names, with how many of them are at the floor.
 
 use crate::mesh::Mesh;
 use serde::Serialize;
 
-/// A split "stalls" when the child's estimate is above this fraction of its
-/// parent's (a smooth u gives 1/4 at r = 1, an x log x edge about 1/2).
-pub const STALL_RATIO: f64 = 0.7;
+/// Splits "stall" when the estimate fell by less than this factor per
+/// split, on average over them (a smooth u gives 1/4 at r = 1, an x log x
+/// edge or a kink about 1/2, a self-similar point about 1). Judged split by
+/// split at 0.7, as before, a kink's uneven factors froze elements on the
+/// shadow family's kinks once the estimate followed them closely.
+pub const STALL_RATIO: f64 = 0.85;
 
-/// Per element of the current mesh: the parent's estimate when it was
-/// split, and the run of stalled splits it inherited.
+/// Per element of the current mesh: the estimates of its ancestors when
+/// they were split, the parent's first (NaN beyond the starting mesh).
 #[derive(Clone, Debug)]
 pub(super) struct History {
-    parent_estimate: Vec<f64>,
-    inherited: Vec<u32>,
+    /// Ancestors kept per element.
+    depth: usize,
+    /// Row-major, `depth` per element.
+    ancestors: Vec<f64>,
 }
 
 impl History {
-    /// The starting mesh of `n` elements.
-    pub fn new(n: usize) -> Self {
+    /// The starting mesh of `n` elements, keeping `depth` ancestors.
+    pub fn new(n: usize, depth: usize) -> Self {
         Self {
-            parent_estimate: vec![f64::NAN; n],
-            inherited: vec![0; n],
+            depth,
+            ancestors: vec![f64::NAN; n * depth],
         }
     }
 
-    /// Per element, how many splits in a row (ending with the one that made
-    /// it) did not lower the estimate below [`STALL_RATIO`] of the parent's,
-    /// given the current `indicator`.
+    fn of(&self, k: usize) -> &[f64] {
+        &self.ancestors[k * self.depth..(k + 1) * self.depth]
+    }
+
+    /// Per element, over how many of its last splits (up to the depth kept)
+    /// the estimate fell by less than [`STALL_RATIO`] per split on average,
+    /// counted from the last split back while that holds, given the current
+    /// `indicator`.
     pub fn stalls(&self, indicator: &[f64]) -> Vec<u32> {
         indicator
             .iter()
             .enumerate()
             .map(|(k, &e)| {
-                let p = self.parent_estimate[k];
-                if p.is_finite() && e > STALL_RATIO * p {
-                    self.inherited[k] + 1
-                } else {
-                    0
-                }
+                let mut bound = 1.0;
+                let held = self.of(k).iter().take_while(|&&a| {
+                    bound *= STALL_RATIO;
+                    a.is_finite() && e > bound * a
+                });
+                held.count() as u32
             })
             .collect()
     }
 
-    /// Whether element k is no longer split: its estimate stalled
-    /// `stall_generations` times in a row (0: never), given `stalls`.
+    /// Whether element k is no longer split: its estimate stalled over
+    /// `stall_generations` splits (0: never), given `stalls`.
     pub fn stalled(k: usize, stalls: &[u32], stall_generations: u32) -> bool {
         stall_generations > 0 && stalls[k] >= stall_generations
     }
 
     /// The history of the refined mesh whose element i came from `parents[i]`
-    /// (split when `split[parents[i]]`), given this mesh's `indicator` and
-    /// `stalls`.
-    pub fn refined(
-        &self,
-        parents: &[usize],
-        split: &[bool],
-        indicator: &[f64],
-        stalls: &[u32],
-    ) -> Self {
-        let mut next = Self::new(parents.len());
+    /// (split when `split[parents[i]]`), given this mesh's `indicator`.
+    pub fn refined(&self, parents: &[usize], split: &[bool], indicator: &[f64]) -> Self {
+        let mut next = Self::new(parents.len(), self.depth);
+        if self.depth == 0 {
+            return next;
+        }
         for (i, &p) in parents.iter().enumerate() {
+            let row = &mut next.ancestors[i * self.depth..(i + 1) * self.depth];
             if split[p] {
-                next.parent_estimate[i] = indicator[p];
-                next.inherited[i] = stalls[p];
+                row[0] = indicator[p];
+                row[1..].copy_from_slice(&self.of(p)[..self.depth - 1]);
             } else {
-                next.parent_estimate[i] = self.parent_estimate[p];
-                next.inherited[i] = self.inherited[p];
+                row.copy_from_slice(self.of(p));
             }
         }
         next
@@ -168,15 +177,16 @@ mod tests {
     use crate::geometry::shapes::box_room;
     use std::sync::Arc;
 
-    /// A run of stalled splits counts up through the generations and resets
-    /// on a split that lowers the estimate.
+    /// Stalls count the splits back from the last over which the estimate
+    /// fell by less than STALL_RATIO per split on average: a split that
+    /// halves it ends the run, one uneven factor between halvings does not
+    /// make one.
     #[test]
-    fn stalls_count_generations_in_a_row() {
-        let h = History::new(2);
+    fn stalls_count_splits_whose_average_factor_is_near_one() {
+        let h = History::new(2, 3);
         // Nothing to compare with on the starting mesh.
         assert_eq!(h.stalls(&[1.0, 1.0]), vec![0, 0]);
-        let ind = [1.0, 1.0];
-        let h = h.refined(&[0, 0, 0, 0, 1], &[true, false], &ind, &[0, 0]);
+        let h = h.refined(&[0, 0, 0, 0, 1], &[true, false], &[1.0, 1.0]);
         // Children of element 0 at 0.9 (stalled) and 0.2 (fell); element 1 unsplit.
         let ind = [0.9, 0.2, 0.2, 0.2, 1.0];
         let s = h.stalls(&ind);
@@ -185,15 +195,26 @@ mod tests {
             &[0, 0, 0, 0, 1, 2, 3, 4],
             &[true, false, false, false, false],
             &ind,
-            &s,
         );
-        let ind2 = [0.8, 0.1, 0.1, 0.1, 0.2, 0.2, 0.2, 1.0];
-        let s2 = h.stalls(&ind2);
+        let s2 = h.stalls(&[0.8, 0.1, 0.1, 0.1, 0.2, 0.2, 0.2, 1.0]);
         assert_eq!(s2[0], 2);
         assert!(History::stalled(0, &s2, 2) && !History::stalled(0, &s2, 3));
         assert!(!History::stalled(0, &s2, 0) && !History::stalled(1, &s2, 2));
-        // A split that lowers the estimate resets the run.
+        // A split that lowers the estimate ends the run.
         assert_eq!(h.stalls(&[0.5, 0.1, 0.1, 0.1, 0.2, 0.2, 0.2, 1.0])[0], 0);
+        // A kink: factors 0.55, 1.33, 0.66 from 1 (the shadow family at
+        // r = 2). After the second split it stalls over two (1.33 · 0.55 is
+        // 0.73 > 0.85²); the third ends the run, as the old split-by-split
+        // rule did not always (0.7 < 1.33, 0.66 < 0.7 here).
+        let (e1, e2) = (0.55, 0.55 * 1.33);
+        let kink = |ancestors: Vec<f64>| History {
+            depth: 3,
+            ancestors,
+        };
+        assert_eq!(kink(vec![e1, 1.0, f64::NAN]).stalls(&[e2]), vec![2]);
+        assert_eq!(kink(vec![e2, e1, 1.0]).stalls(&[e2 * 0.66]), vec![0]);
+        // A self-similar point: flat within 5 % over three splits.
+        assert_eq!(kink(vec![1.02, 0.97, 1.0]).stalls(&[1.0]), vec![3]);
     }
 
     /// Touching elements gather into one neighbourhood, far ones into others.

@@ -18,13 +18,15 @@
 
 mod budget;
 mod history;
+mod options;
 
 pub use history::{singular_points, SingularPoint, STALL_RATIO};
+pub use options::{AdaptOptions, MARK_FRACTION, MAX_FRACTION, MIN_SIZE, STALL_GENERATIONS};
 
 use super::pipeline::{solve_step, Plans, Previous};
 use super::{discretize, SolveConfig, SolveOutcome};
 use crate::assembly::{AssemblyBackend, Unchanged};
-use crate::error::{Error, InputError};
+use crate::error::Error;
 use crate::geometry::barycentric_st;
 use crate::mesh::Mesh;
 use crate::problem::Problem;
@@ -33,82 +35,6 @@ use history::History;
 use serde::Serialize;
 use std::sync::Arc;
 use std::time::Instant;
-
-/// What the adaptive loop aims for and may spend.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct AdaptOptions {
-    /// Target of the estimated max error relative to max |u_n|, per
-    /// channel, in (0, 1).
-    pub target: f64,
-    /// No step with more unknowns than this (None: as many as the dense
-    /// matrix's memory allows).
-    pub max_unknowns: Option<u64>,
-    /// At most this many solves.
-    pub max_steps: usize,
-    /// Elements whose estimate exceeds `mark_fraction · target` are split:
-    /// below 1, elements about to cross the target are split in the same
-    /// step (fewer solves for a few more unknowns).
-    pub mark_fraction: f64,
-    /// ...and exceeds `max_fraction` of the largest estimate of an element
-    /// that may still be split: worst first, so that each step's mesh is
-    /// the one its error needs, and a budget that stops the loop leaves the
-    /// best mesh for its size (0: every element above the target's
-    /// fraction, at once).
-    pub max_fraction: f64,
-    /// An element whose longest edge is shorter than this fraction of the
-    /// diagonal of the scene's bounding box is not split. The stall test
-    /// (`stall_generations`) is what stops refinement at a point where u
-    /// has a direction-dependent limit; this floor is the backstop (with no
-    /// limit at all, the loop graded towards such points until rounding
-    /// broke it: `tests/tests/contact.rs`). It is relative to the scene, not
-    /// counted in splits from the starting mesh, so that the mesh a run
-    /// starts from does not decide how fine it may go: 10 splits from the
-    /// built-in `shadow` scene's 6 triangles stopped the kinks through its
-    /// point umbra at an estimated 1.6e-4 against a 1e-4 target.
-    pub min_size: f64,
-    /// An element whose estimate stayed above [`STALL_RATIO`] of its
-    /// parent's for this many splits in a row is not split again (0: only
-    /// the depth limit applies). At such points the depth limit alone costs
-    /// a solve per wasted generation (the Cornell box from its 50 triangles
-    /// to 1e-3: 12 steps and 14 973 unknowns with the depth limit alone, 9
-    /// steps and 7 710 unknowns with 3 stalled generations).
-    pub stall_generations: u32,
-}
-
-/// The default [`AdaptOptions::max_fraction`].
-pub const MAX_FRACTION: f64 = 0.25;
-
-/// The default [`AdaptOptions::min_size`].
-pub const MIN_SIZE: f64 = 1e-5;
-
-impl Default for AdaptOptions {
-    fn default() -> Self {
-        Self {
-            target: 1e-2,
-            max_unknowns: None,
-            max_steps: 25,
-            mark_fraction: 0.5,
-            max_fraction: MAX_FRACTION,
-            min_size: MIN_SIZE,
-            stall_generations: 3,
-        }
-    }
-}
-
-impl AdaptOptions {
-    /// Refuses a target outside (0, 1) and a size floor outside [0, 1).
-    pub fn check(&self) -> Result<(), InputError> {
-        if !(self.target > 0.0 && self.target < 1.0) {
-            return Err(InputError::TargetError { value: self.target });
-        }
-        if !(self.min_size >= 0.0 && self.min_size < 1.0) {
-            return Err(InputError::MinSize {
-                value: self.min_size,
-            });
-        }
-        Ok(())
-    }
-}
 
 /// Why the loop stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -201,7 +127,10 @@ pub fn solve_adaptive(
     let mut mesh = discretize(problem, &cfg)?.mesh().clone();
     let f = crate::nodes::nodes_per_element(cfg.degree);
     let mut guess: Option<Vec<Vec<f64>>> = None;
-    let (mut history, floor) = (History::new(mesh.len()), opts.min_size * diagonal(&mesh));
+    let (mut history, floor) = (
+        History::new(mesh.len(), opts.stall_generations as usize),
+        opts.min_size * diagonal(&mesh),
+    );
     let mut steps = Vec::new();
     // The previous solve, its plans and which elements it shares with this
     // mesh: pairs of unchanged elements are neither classified nor
@@ -277,7 +206,7 @@ pub fn solve_adaptive(
         let (refined, parents) = refine(&mesh, &marked[..split]);
         guess = Some(transfer(&out, &refined, &parents));
         let split_mark = marks(mesh.len(), &marked[..split]);
-        history = history.refined(&parents, &split_mark, &indicator, &stalls);
+        history = history.refined(&parents, &split_mark, &indicator);
         let unchanged = Arc::new(unchanged_of(&parents, &split_mark));
         previous = Some((out, plans, unchanged));
         pending_singular = singular;

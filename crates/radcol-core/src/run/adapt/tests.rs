@@ -1,6 +1,7 @@
 //! The adaptive loop's parts: splitting, marking, budget, options.
 
 use super::*;
+use crate::error::InputError;
 use crate::geometry::shapes::box_room;
 
 /// Splitting keeps area, counts and the parent map, and children follow
