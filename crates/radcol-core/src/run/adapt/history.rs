@@ -8,8 +8,9 @@
 //! split divides the max error by about 2^(r+1) where u is smooth, and by
 //! about 2 next to a concave edge (u ~ x log x) or along a kink, on
 //! average: along a kink the factor of one split varies with where the
-//! line crosses the child (on the shadow family at r = 2, 0.55, 1.33 and
-//! 0.66 in a row, then the line left the chain's element). So an element
+//! line crosses the child (on the shadow family's line x = 0.2 at r = 3 the
+//! element on it went 4.3e-3, 3.6e-3, 2.5e-3, 3.3e-3, then 3.9e-4: flat for
+//! three splits, then tenfold). So an element
 //! whose estimate fell by less than [`STALL_RATIO`] per split on average
 //! over its last `stall_generations` splits is not split again (nor is one
 //! at the size floor, `AdaptOptions::min_size`), and the elements left
@@ -22,8 +23,10 @@ use serde::Serialize;
 /// Splits "stall" when the estimate fell by less than this factor per
 /// split, on average over them (a smooth u gives 1/4 at r = 1, an x log x
 /// edge or a kink about 1/2, a self-similar point about 1). Judged split by
-/// split at 0.7, as before, a kink's uneven factors froze elements on the
-/// shadow family's kinks once the estimate followed them closely.
+/// split at 0.7 over 3 splits, as before, and averaged over 3, a kink's
+/// uneven factors froze elements on the shadow family's kinks once the
+/// estimate followed them closely; averaged over 4 (the default
+/// `stall_generations`) they did not.
 pub const STALL_RATIO: f64 = 0.85;
 
 /// Per element of the current mesh: the estimates of its ancestors when
@@ -202,19 +205,23 @@ mod tests {
         assert!(!History::stalled(0, &s2, 0) && !History::stalled(1, &s2, 2));
         // A split that lowers the estimate ends the run.
         assert_eq!(h.stalls(&[0.5, 0.1, 0.1, 0.1, 0.2, 0.2, 0.2, 1.0])[0], 0);
-        // A kink: factors 0.55, 1.33, 0.66 from 1 (the shadow family at
-        // r = 2). After the second split it stalls over two (1.33 · 0.55 is
-        // 0.73 > 0.85²); the third ends the run, as the old split-by-split
-        // rule did not always (0.7 < 1.33, 0.66 < 0.7 here).
-        let (e1, e2) = (0.55, 0.55 * 1.33);
-        let kink = |ancestors: Vec<f64>| History {
-            depth: 3,
+        // The element on the shadow family's kink x = 0.2 at r = 3, split
+        // after split: 3.9e-2, 4.3e-3, 3.6e-3, 2.5e-3, 3.3e-3, then 3.9e-4.
+        // Flat over three splits (stalled, were three the limit), not over
+        // four; the next split ends the run.
+        let chain = |ancestors: Vec<f64>| History {
+            depth: 4,
             ancestors,
         };
-        assert_eq!(kink(vec![e1, 1.0, f64::NAN]).stalls(&[e2]), vec![2]);
-        assert_eq!(kink(vec![e2, e1, 1.0]).stalls(&[e2 * 0.66]), vec![0]);
-        // A self-similar point: flat within 5 % over three splits.
-        assert_eq!(kink(vec![1.02, 0.97, 1.0]).stalls(&[1.0]), vec![3]);
+        let kink = chain(vec![2.503e-3, 3.615e-3, 4.277e-3, 3.855e-2]);
+        let s = kink.stalls(&[3.272e-3]);
+        assert_eq!(s, vec![3]);
+        assert!(History::stalled(0, &s, 3) && !History::stalled(0, &s, 4));
+        let next = chain(vec![3.272e-3, 2.503e-3, 3.615e-3, 4.277e-3]);
+        assert_eq!(next.stalls(&[3.932e-4]), vec![0]);
+        // A self-similar point: flat within 5 % over four splits.
+        let flat = chain(vec![1.02, 0.97, 1.0, 1.04]);
+        assert_eq!(flat.stalls(&[1.0]), vec![4]);
     }
 
     /// Touching elements gather into one neighbourhood, far ones into others.
