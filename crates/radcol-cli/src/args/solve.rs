@@ -31,8 +31,8 @@ pub struct SolveArgs {
     /// Refine adaptively until the estimated max error relative to max |u| is at most TOL
     /// (in (0, 1)): elements whose estimate is large are split 4:1 and the problem
     /// re-solved, starting from --level/--max-edge (a scene with materials given neither:
-    /// its own triangles). Where the error stops falling under refinement (three splits in
-    /// a row that leave an element's estimate above 0.7 of its parent's: the foot of a
+    /// its own triangles). Where the error stops falling under refinement (four splits that
+    /// lowered an element's estimate by less than 0.85 each on average: the foot of a
     /// block's corner on a floor), or below 1e-5 of the scene's diagonal, elements are no
     /// longer split; the loop then stops when the rest is below TOL and names those points
     /// [default: uniform refinement only].
