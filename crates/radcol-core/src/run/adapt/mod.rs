@@ -127,10 +127,8 @@ pub fn solve_adaptive(
     let mut mesh = discretize(problem, &cfg)?.mesh().clone();
     let f = crate::nodes::nodes_per_element(cfg.degree);
     let mut guess: Option<Vec<Vec<f64>>> = None;
-    let (mut history, floor) = (
-        History::new(mesh.len(), opts.stall_generations as usize),
-        opts.min_size * diagonal(&mesh),
-    );
+    let mut history = History::new(mesh.len(), opts.stall_generations as usize);
+    let floor = opts.min_size * diagonal(&mesh);
     let mut steps = Vec::new();
     // The previous solve, its plans and which elements it shares with this
     // mesh: pairs of unchanged elements are neither classified nor
