@@ -81,6 +81,34 @@ impl AssemblyPlan {
     /// [`AssemblyPlan::at_points`] plan; length rows · N, row-major). Returns
     /// kernel evaluations.
     pub fn fill_block(&self, kp: usize, block: &mut [f64], mode: FillMode) -> u64 {
+        // Columns whose entries are the previous matrix's (FillMode::NotReused).
+        let unchanged = self.unchanged.as_deref().filter(|u| u.old(kp).is_some());
+        let skip =
+            |k: usize| mode == FillMode::NotReused && unchanged.is_some_and(|u| u.old(k).is_some());
+        let mode = match mode {
+            FillMode::NotReused => FillMode::All,
+            m => m,
+        };
+        self.fill_block_except(kp, block, mode, skip)
+    }
+
+    /// The columns of the elements `wanted` of the row block of element
+    /// `kp` (every pair class, as [`AssemblyPlan::fill_block`] fills them);
+    /// the other entries of `block` are left as they were. Returns kernel
+    /// evaluations.
+    pub fn fill_columns(&self, kp: usize, block: &mut [f64], wanted: &[bool]) -> u64 {
+        self.fill_block_except(kp, block, FillMode::All, |k| !wanted[k])
+    }
+
+    /// [`AssemblyPlan::fill_block`] in `mode` (not `NotReused`) but for the
+    /// columns of the elements `skip` names.
+    fn fill_block_except(
+        &self,
+        kp: usize,
+        block: &mut [f64],
+        mode: FillMode,
+        skip: impl Fn(usize) -> bool,
+    ) -> u64 {
         // A cancelled solve skips the rest: the pipeline then returns
         // `Error::Cancelled` instead of this matrix.
         if self.progress.as_ref().is_some_and(|p| p.cancelled()) {
@@ -109,14 +137,6 @@ impl AssemblyPlan {
         };
         let max_nq = self.max_nq();
         let mut g = vec![0.0f64; RUN_CHUNK * max_nq];
-        // Columns whose entries are the previous matrix's (FillMode::NotReused).
-        let unchanged = self.unchanged.as_deref().filter(|u| u.old(kp).is_some());
-        let skip =
-            |k: usize| mode == FillMode::NotReused && unchanged.is_some_and(|u| u.old(k).is_some());
-        let mode = match mode {
-            FillMode::NotReused => FillMode::All,
-            m => m,
-        };
         let mut evals = 0u64;
         let mut k = 0;
         while k < n {
