@@ -3,22 +3,25 @@
 //! entries are the plan and matrix built from scratch, bit for bit: on a
 //! scene that occludes (the Cornell box: clipped pairs with occluder
 //! candidates) and on a curved surface (the sphere: near and self pairs),
-//! over two refinements in a row. The estimate's check rows likewise
-//! (`AssemblyPlan::at_points` updated, `estimate::check_matrix` reusing the
-//! old rows), and the estimate from them equals the one filled block by
-//! block.
+//! over two refinements in a row. The estimate's check-point plan likewise
+//! (`AssemblyPlan::at_points` updated), and the estimate through it equals
+//! the one through a fresh plan. An estimate updated from the previous
+//! step's (`estimate::estimate_updated`) is within its bound of the
+//! computed one.
 
 use radcol_core::assembly::{
     AssemblyBackend, AssemblyPlan, CpuBackend, QuadratureOptions, Unchanged,
 };
 use radcol_core::discretization::Discretization;
-use radcol_core::estimate::{check_matrix, check_nodes, estimate, estimate_from, ChannelFields};
+use radcol_core::estimate::{
+    check_nodes, estimate, estimate_updated, ChannelFields, ErrorEstimate,
+};
 use radcol_core::geometry::shapes::sphere;
-use radcol_core::matrix::DenseMatrix;
 use radcol_core::mesh::Mesh;
 use radcol_core::nodes::NodeSet;
-use radcol_core::run::adapt::refine;
+use radcol_core::run::adapt::{on_refined, refine};
 use radcol_core::scene::builtin;
+use radcol_core::solution::Solution;
 use radcol_core::visibility;
 use std::sync::Arc;
 
@@ -38,7 +41,6 @@ fn check(surface: Arc<radcol_core::geometry::Surface>, level: u32, degree: usize
     };
     let mut check =
         AssemblyPlan::at_points(disc.clone(), check_rows(&disc), quad.clone(), &vis, None);
-    let mut rows: DenseMatrix = check_matrix(&check, None).0;
     for step in 0..2 {
         // Every third element (shifted per step) split.
         let split: Vec<usize> = (step..mesh.len()).step_by(3).collect();
@@ -88,9 +90,8 @@ fn check(surface: Arc<radcol_core::geometry::Surface>, level: u32, degree: usize
             reused.kernel_evals as f64 / full.kernel_evals as f64
         );
         assert!(reused.kernel_evals < full.kernel_evals);
-        // The check rows: updated plan reusing the old rows against a fresh
-        // plan filled whole, and the estimate from them against the one
-        // filled block by block (u_n = 1 + x, ρ = 0.5, E = 1 at the rows).
+        // The check-point plan updated against a fresh one, and the estimate
+        // through each (u_n = 1 + x, ρ = 0.5, E = 1 at the rows).
         let disc = updated.discretization().clone();
         let check_updated = AssemblyPlan::at_points(
             disc.clone(),
@@ -101,13 +102,11 @@ fn check(surface: Arc<radcol_core::geometry::Surface>, level: u32, degree: usize
         );
         let check_fresh =
             AssemblyPlan::at_points(disc.clone(), check_rows(&disc), quad.clone(), &vis, None);
-        let (rows_reused, evals_reused) = check_matrix(&check_updated, Some(&rows));
-        let (rows_fresh, evals_fresh) = check_matrix(&check_fresh, None);
-        assert!(
-            rows_reused.as_slice() == rows_fresh.as_slice(),
-            "{what} step {step}: reused check rows differ"
+        assert_eq!(
+            check_updated.classes(),
+            check_fresh.classes(),
+            "{what} step {step}: check classes"
         );
-        assert!(evals_reused < evals_fresh);
         let solution = radcol_core::solution::Solution::new(
             disc.clone(),
             disc.points().iter().map(|p| 1.0 + p.position.x).collect(),
@@ -121,7 +120,7 @@ fn check(surface: Arc<radcol_core::geometry::Surface>, level: u32, degree: usize
             emission_nodes: &en,
         }];
         let a = estimate(&check_fresh, &fields);
-        let b = estimate_from(&check_updated, &rows_reused, &fields);
+        let b = estimate(&check_updated, &fields);
         assert!(
             a[0].elements == b[0].elements && a[0].max == b[0].max && a[0].l2 == b[0].l2,
             "{what} step {step}: estimates differ"
@@ -130,7 +129,6 @@ fn check(surface: Arc<radcol_core::geometry::Surface>, level: u32, degree: usize
         plan = updated;
         matrix = reused.matrix;
         check = check_updated;
-        rows = rows_reused;
     }
 }
 
@@ -139,4 +137,185 @@ fn updated_plans_and_reused_entries_equal_fresh_ones() {
     let cornell = builtin("cornell").unwrap().unwrap();
     check(cornell.problem().surface, 0, 1, "cornell r=1");
     check(Arc::new(sphere(1.0)), 1, 2, "sphere r=2");
+}
+
+/// An estimate updated from the previous step's
+/// (`estimate::estimate_updated`) is within the bound it reports of the
+/// estimate computed afresh, element by element, with u_n changed a little
+/// on the unchanged elements and much on the new ones; a change too large
+/// everywhere is refused, and so is an update of an estimate whose
+/// allowance is spent.
+fn check_update(
+    surface: Arc<radcol_core::geometry::Surface>,
+    level: u32,
+    degree: usize,
+    what: &str,
+) {
+    let vis = visibility::analyze(&surface);
+    let quad = QuadratureOptions::default();
+    let nodes = NodeSet::new(degree, 0.1).unwrap();
+    let mesh = Arc::new(Mesh::new(surface, level));
+    let disc = Arc::new(Discretization::new(mesh.clone(), nodes.clone()));
+    let check_rows = |d: &Arc<Discretization>| {
+        Arc::new(Discretization::new(
+            d.mesh().clone(),
+            check_nodes(degree, nodes.alpha()),
+        ))
+    };
+    let old_check =
+        AssemblyPlan::at_points(disc.clone(), check_rows(&disc), quad.clone(), &vis, None);
+    let wave = |p: glam::DVec3| 1.0 + 0.5 * (p.x + 2.0 * p.y).sin() + 0.2 * p.z;
+    let u_old = Solution::new(
+        disc.clone(),
+        disc.points().iter().map(|p| wave(p.position)).collect(),
+    );
+    let fields = |check: &AssemblyPlan, u: &'_ Solution| {
+        let m = check.rows().len();
+        (
+            vec![0.6; m],
+            vec![1.0; m],
+            vec![1.0; u.discretization().len()],
+        )
+    };
+    let (rho, e, en) = fields(&old_check, &u_old);
+    let old = estimate(
+        &old_check,
+        &[ChannelFields {
+            solution: &u_old,
+            rho: &rho,
+            emission: &e,
+            emission_nodes: &en,
+        }],
+    );
+    // Every fifteenth element split: a fifth of the new mesh's elements are new.
+    let split: Vec<usize> = (0..mesh.len()).step_by(15).collect();
+    let (refined, parents) = refine(&mesh, &split);
+    let old_of: Vec<Option<usize>> = parents
+        .iter()
+        .map(|&p| (!split.contains(&p)).then_some(p))
+        .collect();
+    let unchanged = Arc::new(Unchanged::new(&old_of, mesh.len()));
+    let refined = Arc::new(refined);
+    let g = on_refined(&u_old, &refined, &parents);
+    let disc = Arc::new(Discretization::new(refined.clone(), nodes.clone()));
+    let updated = AssemblyPlan::at_points(
+        disc.clone(),
+        check_rows(&disc),
+        quad.clone(),
+        &vis,
+        Some((&old_check, unchanged.clone())),
+    );
+    let fresh = AssemblyPlan::at_points(disc.clone(), check_rows(&disc), quad.clone(), &vis, None);
+    let scale = u_old.nodal().iter().fold(0.0f64, |m, u| m.max(u.abs()));
+    // Δ: 1e-2 on new elements, `small` on unchanged ones (varying by node).
+    let change_of = |small: f64| -> Vec<f64> {
+        disc.points()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let w = if old_of[p.element].is_some() {
+                    small
+                } else {
+                    1e-2
+                };
+                w * scale * ((i % 5) as f64 - 2.0) / 2.0
+            })
+            .collect()
+    };
+    let within = 1e-4;
+    for small in [0.0, 1e-9, 1e-6] {
+        let delta = change_of(small);
+        let u_new = Solution::new(
+            disc.clone(),
+            g.iter().zip(&delta).map(|(g, d)| g + d).collect(),
+        );
+        let (rho, e, en) = fields(&fresh, &u_new);
+        let ch = [ChannelFields {
+            solution: &u_new,
+            rho: &rho,
+            emission: &e,
+            emission_nodes: &en,
+        }];
+        let a = &estimate(&fresh, &ch)[0];
+        let b = estimate_updated(
+            &updated,
+            &ch,
+            &[&old[0]],
+            std::slice::from_ref(&delta),
+            within,
+        )
+        .unwrap_or_else(|| panic!("{what}: Δ {small:e} on unchanged elements refused"));
+        let b = &b[0];
+        let bound = b.updated_within.expect("an update says so");
+        assert!(
+            bound > 0.0 && bound <= within * scale * 1.0001,
+            "{what}: bound {bound:e}"
+        );
+        let worst = a
+            .elements
+            .iter()
+            .zip(&b.elements)
+            .map(|(x, y)| (y - x).abs())
+            .fold(0.0f64, f64::max);
+        println!(
+            "{what}, Δ {small:e} on unchanged: bound {:.2e}, largest deviation {:.2e} (of max|u| {scale:.3})",
+            bound, worst
+        );
+        assert!(
+            worst <= bound,
+            "{what}, Δ {small:e}: {worst:e} > bound {bound:e}"
+        );
+        assert!(
+            (b.max - a.max).abs() <= bound,
+            "{what}: max {:e} against {:e}",
+            b.max,
+            a.max
+        );
+        // Not vacuous: dropping the new elements' columns from the update
+        // would move η by about 1e-2 max|u| times their form factors.
+        assert!(
+            bound < 1e-3 * a.max.max(1e-6 * scale),
+            "{what}: bound {bound:e} against max {:e}",
+            a.max
+        );
+        // A previous estimate that already spent the allowance is not
+        // updated again.
+        let lc = check_nodes(degree, nodes.alpha()).lebesgue_constant();
+        let spent = ErrorEstimate {
+            check_ku_drift: within * scale / (lc * 0.6),
+            ..old[0].clone()
+        };
+        assert!(estimate_updated(
+            &updated,
+            &ch,
+            &[&spent],
+            std::slice::from_ref(&delta),
+            within
+        )
+        .is_none());
+    }
+    // A change of 1e-2 everywhere leaves no column to bound: refused.
+    let delta = vec![1e-2 * scale; disc.len()];
+    let u_new = Solution::new(
+        disc.clone(),
+        g.iter().zip(&delta).map(|(g, d)| g + d).collect(),
+    );
+    let (rho, e, en) = fields(&fresh, &u_new);
+    let ch = [ChannelFields {
+        solution: &u_new,
+        rho: &rho,
+        emission: &e,
+        emission_nodes: &en,
+    }];
+    assert!(
+        estimate_updated(&updated, &ch, &[&old[0]], &[delta], within).is_none(),
+        "{what}"
+    );
+}
+
+#[test]
+fn updated_estimates_are_within_their_bound_of_computed_ones() {
+    let cornell = builtin("cornell").unwrap().unwrap();
+    check_update(cornell.problem().surface, 1, 1, "cornell r=1");
+    check_update(Arc::new(sphere(1.0)), 1, 2, "sphere r=2");
 }

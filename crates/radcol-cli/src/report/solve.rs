@@ -339,14 +339,19 @@ impl SolveReport {
 
 /// The estimate's line(s) of one channel.
 fn fmt_estimate(f: &mut fmt::Formatter<'_>, e: &ErrorEstimate, eff: Option<f64>) -> fmt::Result {
+    let updated = |b: f64| {
+        let rel = sci(b / e.scale.max(f64::MIN_POSITIVE));
+        format!("; updated from the previous step's, within {rel} of max|u| of the computed one")
+    };
     writeln!(
         f,
-        "              estimated error: max {} of max|u| = {}, rms {}{}",
+        "              estimated error: max {} of max|u| = {}, rms {}{}{}",
         sci(e.max_rel),
         sci(e.scale),
         sci(e.rms_rel),
         eff.map(|x| format!(" (estimate / true global max = {x:.2})"))
-            .unwrap_or_default()
+            .unwrap_or_default(),
+        e.updated_within.map(updated).unwrap_or_default()
     )?;
     let negative = e.negative_nodes + e.negative_points;
     if negative > 0 {

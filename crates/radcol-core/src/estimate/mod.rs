@@ -31,13 +31,15 @@
 
 use crate::assembly::{AssemblyPlan, FillMode};
 use crate::discretization::Discretization;
-use crate::matrix::DenseMatrix;
 use crate::nodes::{NodeSet, MAX_DEGREE};
 use crate::norms::LATTICE;
 use crate::quadrature::RuleLadder;
 use crate::solution::Solution;
 use rayon::prelude::*;
 use serde::Serialize;
+
+mod update;
+pub use update::{estimate_updated, UPDATE_SHARE};
 
 /// The element-integral tolerance of the check rows (the solve's own when
 /// looser): η is wanted to a few digits, and an integral error of 1e-9
@@ -123,6 +125,19 @@ pub struct ErrorEstimate {
     /// light is unphysical; length n.
     #[serde(skip)]
     pub negative: Vec<bool>,
+    /// When the estimate was updated from the previous adaptive step's
+    /// ([`estimate_updated`]) instead of computed afresh: at most how far
+    /// (absolute) η, each element's figure and `max` can be from the
+    /// computed ones.
+    pub updated_within: Option<f64>,
+    /// ∫_S G V u_n / π at every check point (ordered like the check rows):
+    /// û_n = E + ρ · this. What the next step's update starts from.
+    #[serde(skip)]
+    pub check_ku: Vec<f64>,
+    /// At most how far `check_ku` can be from the computed values (0 when
+    /// computed; updates accumulate it).
+    #[serde(skip)]
+    pub check_ku_drift: f64,
 }
 
 impl ErrorEstimate {
@@ -155,117 +170,70 @@ pub fn estimate(check: &AssemblyPlan, channels: &[ChannelFields<'_>]) -> Vec<Err
     let fc = check.rows().nodes_per_element();
     let ncols = check.dim();
     let n = check.rows().mesh().len();
-    residuals(check, channels, |coeffs| {
-        (0..n)
-            .into_par_iter()
-            .map_init(
-                || vec![0.0; fc * ncols],
-                |block, kp| {
-                    check.fill_block(kp, block, FillMode::All);
-                    contract(kp, block, fc, ncols, channels, coeffs)
-                },
-            )
-            .collect()
-    })
+    let blocks = (0..n)
+        .into_par_iter()
+        .map_init(
+            || vec![0.0; fc * ncols],
+            |block, kp| {
+                check.fill_block(kp, block, FillMode::All);
+                contract(block, fc, ncols, channels)
+            },
+        )
+        .collect();
+    summaries(check, channels, by_channel(blocks, channels.len(), fc))
 }
 
-/// The check rows of `check` as one matrix (f_c·n × N), the pairs of
-/// unchanged elements copied from `previous` (the matrix of the plan
-/// `check` was updated from) when given: the adaptive loop keeps it for the
-/// next step, where most pairs are unchanged. Returns the matrix and the
-/// kernel evaluations spent.
-pub fn check_matrix(check: &AssemblyPlan, previous: Option<&DenseMatrix>) -> (DenseMatrix, u64) {
-    let fc = check.rows().nodes_per_element();
-    let f = check.discretization().nodes_per_element();
-    let ncols = check.dim();
-    let mut m = DenseMatrix::zeros(check.rows().len(), ncols);
-    let mode = match (previous, check.unchanged()) {
-        (Some(prev), Some(u)) => {
-            u.copy_blocks_of(prev, &mut m, fc, f);
-            FillMode::NotReused
-        }
-        _ => FillMode::All,
-    };
-    let evals = if ncols == 0 {
-        0
-    } else {
-        m.as_mut_slice()
-            .par_chunks_exact_mut(fc * ncols)
-            .enumerate()
-            .map(|(kp, block)| check.fill_block(kp, block, mode))
-            .sum()
-    };
-    (m, evals)
-}
-
-/// [`estimate`] from the check rows already filled ([`check_matrix`]):
-/// the same figures, bit for bit.
-pub fn estimate_from(
-    check: &AssemblyPlan,
-    matrix: &DenseMatrix,
-    channels: &[ChannelFields<'_>],
-) -> Vec<ErrorEstimate> {
-    let fc = check.rows().nodes_per_element();
-    let ncols = check.dim();
-    assert_eq!(
-        (matrix.nrows(), matrix.ncols()),
-        (check.rows().len(), ncols)
-    );
-    residuals(check, channels, |coeffs| {
-        matrix
-            .as_slice()
-            .par_chunks(fc * ncols.max(1))
-            .enumerate()
-            .map(|(kp, block)| contract(kp, block, fc, ncols, channels, coeffs))
-            .collect()
-    })
-}
-
-/// u_n at the check points (its coefficients in the check basis), η per
-/// element from `eta_of(coefficients)` (channel-major within each element's
-/// block), and the summaries.
-fn residuals(
-    check: &AssemblyPlan,
-    channels: &[ChannelFields<'_>],
-    eta_of: impl FnOnce(&[Vec<f64>]) -> Vec<Vec<f64>>,
-) -> Vec<ErrorEstimate> {
-    let disc = check.rows();
-    let fc = disc.nodes_per_element();
-    let coeffs: Vec<Vec<f64>> = channels
-        .iter()
-        .map(|ch| {
-            disc.points()
-                .par_iter()
-                .map(|p| ch.solution.eval(p.element, p.st[0], p.st[1]))
+/// Per channel, the values of every element's `blocks` (channel-major
+/// within each block, `fc` per channel), in check-row order.
+fn by_channel(blocks: Vec<Vec<f64>>, channels: usize, fc: usize) -> Vec<Vec<f64>> {
+    (0..channels)
+        .map(|c| {
+            blocks
+                .iter()
+                .flat_map(|b| b[c * fc..(c + 1) * fc].iter().copied())
                 .collect()
         })
-        .collect();
-    let eta = eta_of(&coeffs);
-    channels
-        .iter()
-        .enumerate()
-        .map(|(ci, ch)| summarise(disc, ch, &coeffs[ci], |k, a| eta[k][ci * fc + a]))
         .collect()
 }
 
-/// η at the `fc` check points of element `kp` for every channel, from its
-/// rows `block` (fc × ncols): E + ρ K u_n - u_n.
-fn contract(
-    kp: usize,
-    block: &[f64],
-    fc: usize,
-    ncols: usize,
+/// The estimate of every channel from `ku`, K u_n at its check points
+/// (computed, drift 0): u_n there, η = E + ρ K u_n - u_n, and the summaries.
+fn summaries(
+    check: &AssemblyPlan,
     channels: &[ChannelFields<'_>],
-    coeffs: &[Vec<f64>],
-) -> Vec<f64> {
+    ku: Vec<Vec<f64>>,
+) -> Vec<ErrorEstimate> {
+    let disc = check.rows();
+    let fc = disc.nodes_per_element();
+    channels
+        .iter()
+        .zip(ku)
+        .map(|(ch, ku)| {
+            let coeffs: Vec<f64> = disc
+                .points()
+                .par_iter()
+                .map(|p| ch.solution.eval(p.element, p.st[0], p.st[1]))
+                .collect();
+            let eta = |k: usize, a: usize| {
+                let i = k * fc + a;
+                ch.emission[i] + ch.rho[i] * ku[i] - coeffs[i]
+            };
+            let mut e = summarise(disc, ch, &coeffs, eta);
+            e.check_ku = ku;
+            e
+        })
+        .collect()
+}
+
+/// K u_n at the `fc` check points of one element for every channel
+/// (channel-major), from its rows `block` (fc × ncols).
+fn contract(block: &[f64], fc: usize, ncols: usize, channels: &[ChannelFields<'_>]) -> Vec<f64> {
     let mut out = Vec::with_capacity(channels.len() * fc);
-    for (ch, c) in channels.iter().zip(coeffs) {
+    for ch in channels {
         let u = ch.solution.nodal();
         for a in 0..fc {
-            let i = kp * fc + a;
             let row = &block[a * ncols..(a + 1) * ncols];
-            let ku: f64 = row.iter().zip(u).map(|(g, u)| g * u).sum();
-            out.push(ch.emission[i] + ch.rho[i] * ku - c[i]);
+            out.push(row.iter().zip(u).map(|(g, u)| g * u).sum());
         }
     }
     out
@@ -358,6 +326,9 @@ fn summarise(
         nonnegative_problem: nonneg,
         elements,
         negative,
+        updated_within: None,
+        check_ku: Vec::new(),
+        check_ku_drift: 0.0,
     }
 }
 

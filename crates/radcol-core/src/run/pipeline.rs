@@ -6,16 +6,15 @@ use super::operator::{
     OperatorDecision, OperatorKind,
 };
 use super::relight::Relighter;
-use super::size::{available_memory, check_rows_stored, MemoryUse};
+use super::size::{available_memory, MemoryUse};
 use super::{ChannelResult, SolveConfig, SolveOutcome, Timings};
 use crate::assembly::QuadratureOptions;
 use crate::assembly::{AssemblyBackend, AssemblyPlan, BackendInfo, CpuBackend, Unchanged};
 use crate::discretization::Discretization;
 use crate::error::Error;
 use crate::estimate::{
-    check_matrix, check_nodes, estimate, estimate_from, ChannelFields, ESTIMATE_QUAD_TOL,
+    check_nodes, estimate, estimate_updated, ChannelFields, ErrorEstimate, ESTIMATE_QUAD_TOL,
 };
-use crate::matrix::DenseMatrix;
 use crate::mesh::Mesh;
 use crate::nodes::NodeSet;
 use crate::norms::error_norms;
@@ -30,8 +29,6 @@ use std::time::Instant;
 pub(crate) struct Plans {
     solve: AssemblyPlan,
     check: Option<AssemblyPlan>,
-    /// The check rows, when they were kept for the next step.
-    check_matrix: Option<DenseMatrix>,
 }
 
 /// What a solve on a refined mesh takes from the solve of the mesh it was
@@ -41,6 +38,10 @@ pub(crate) struct Previous<'a> {
     pub(crate) outcome: &'a SolveOutcome,
     pub(crate) plans: &'a Plans,
     pub(crate) unchanged: Arc<Unchanged>,
+    /// How far (relative to max |u_n|) an estimate updated from the
+    /// previous one may be from the computed one
+    /// ([`crate::estimate::estimate_updated`]); 0: computed always.
+    pub(crate) estimate_within: f64,
 }
 
 /// What the assembly stage built.
@@ -64,7 +65,6 @@ fn assemble(
     visibility: &VisibilityAnalysis,
     backend: &dyn AssemblyBackend,
     previous: Option<&Previous<'_>>,
-    keep_check: bool,
     channels: usize,
 ) -> Result<Built, Error> {
     let mut decision = decide_now(cfg, disc.len() as u64, disc.mesh().len() as u64)?;
@@ -101,8 +101,6 @@ fn assemble(
             cfg.solver,
             channels * (cfg.gmres.restart + 4),
             cfg.estimate,
-            disc.mesh().len() * crate::nodes::nodes_per_element(disc.nodes().degree() + 1),
-            keep_check,
         )
         .with_matrix(matrix_bytes)
     };
@@ -189,10 +187,10 @@ fn estimate_channels(
     visibility: &VisibilityAnalysis,
     channels: &mut [ChannelResult],
     previous: Option<&Previous<'_>>,
-    keep_check: bool,
-) -> Result<(Option<AssemblyPlan>, Option<DenseMatrix>), Error> {
+    guess: Option<&[Vec<f64>]>,
+) -> Result<Option<AssemblyPlan>, Error> {
     let Some(first) = channels.first() else {
-        return Ok((None, None));
+        return Ok(None);
     };
     Error::if_cancelled(cfg.progress.as_ref(), "solve")?;
     let disc = first.solution.discretization();
@@ -221,22 +219,49 @@ fn estimate_channels(
             emission_nodes: &ch.emission,
         })
         .collect();
-    let bytes = 8.0 * plan.rows().len() as f64 * plan.dim() as f64;
-    let store = keep_check && check_rows_stored(bytes);
-    let (estimates, kept) = if store {
-        let prev = previous.and_then(|p| p.plans.check_matrix.as_ref());
-        let (m, _) = check_matrix(&plan, prev);
-        (estimate_from(&plan, &m, &inputs), Some(m))
-    } else {
-        (estimate(&plan, &inputs), None)
-    };
+    let updated = previous
+        .zip(guess)
+        .and_then(|(p, g)| update(&plan, &inputs, p, g));
+    let estimates = updated.unwrap_or_else(|| estimate(&plan, &inputs));
     for (ch, e) in channels.iter_mut().zip(estimates) {
         ch.estimate = Some(e);
     }
     if let Some(p) = &cfg.progress {
         p.advance(blocks);
     }
-    Ok((Some(plan), kept))
+    Ok(Some(plan))
+}
+
+/// The estimate of `inputs` updated from `previous`'s, with `guess` (the
+/// previous solution at this mesh's nodes), where that is allowed and pays.
+fn update(
+    plan: &AssemblyPlan,
+    inputs: &[ChannelFields<'_>],
+    previous: &Previous<'_>,
+    guess: &[Vec<f64>],
+) -> Option<Vec<ErrorEstimate>> {
+    if previous.estimate_within <= 0.0 {
+        return None;
+    }
+    let prev: Option<Vec<_>> = previous
+        .outcome
+        .channels
+        .iter()
+        .map(|c| c.estimate.as_ref())
+        .collect();
+    let change: Vec<Vec<f64>> = inputs
+        .iter()
+        .zip(guess)
+        .map(|(ch, g)| {
+            ch.solution
+                .nodal()
+                .iter()
+                .zip(g)
+                .map(|(u, g)| u - g)
+                .collect()
+        })
+        .collect();
+    estimate_updated(plan, inputs, &prev?, &change, previous.estimate_within)
 }
 
 /// Solves `problem` with `cfg`, assembling on `backend`.
@@ -255,7 +280,6 @@ pub fn solve(
         backend,
         visibility: &visibility,
         guess: None,
-        keep_check: false,
         previous: None,
     };
     Ok(stages.run(disc, t0)?.0)
@@ -272,7 +296,7 @@ pub fn solve_on_mesh(
     backend: &dyn AssemblyBackend,
     guess: Option<&[Vec<f64>]>,
 ) -> Result<SolveOutcome, Error> {
-    Ok(solve_step(problem, cfg, mesh, backend, guess, None, false)?.0)
+    Ok(solve_step(problem, cfg, mesh, backend, guess, None)?.0)
 }
 
 /// [`solve_on_mesh`], reusing what `previous` has for the pairs of unchanged
@@ -284,7 +308,6 @@ pub(crate) fn solve_step(
     backend: &dyn AssemblyBackend,
     guess: Option<&[Vec<f64>]>,
     previous: Option<&Previous<'_>>,
-    keep_check: bool,
 ) -> Result<(SolveOutcome, Plans), Error> {
     let t0 = Instant::now();
     check_quadrature(cfg)?;
@@ -301,7 +324,6 @@ pub(crate) fn solve_step(
         visibility: &visibility,
         guess,
         previous,
-        keep_check,
     };
     stages.run(disc, t0)
 }
@@ -314,8 +336,6 @@ struct Stages<'a> {
     visibility: &'a VisibilityAnalysis,
     guess: Option<&'a [Vec<f64>]>,
     previous: Option<&'a Previous<'a>>,
-    /// Keep the estimate's check rows for the next step (the adaptive loop).
-    keep_check: bool,
 }
 
 impl Stages<'_> {
@@ -336,7 +356,6 @@ impl Stages<'_> {
             &visibility,
             self.backend,
             self.previous,
-            self.keep_check,
             problem.channels.len(),
         )?;
         let assembly_s = t.elapsed().as_secs_f64();
@@ -354,17 +373,17 @@ impl Stages<'_> {
         let errors_s = t.elapsed().as_secs_f64();
 
         let t = Instant::now();
-        let (check, check_matrix) = if cfg.estimate {
+        let check = if cfg.estimate {
             estimate_channels(
                 problem,
                 cfg,
                 &visibility,
                 &mut channels,
                 self.previous,
-                self.keep_check,
+                self.guess,
             )?
         } else {
-            (None, None)
+            None
         };
         let estimate_s = t.elapsed().as_secs_f64();
         Error::if_cancelled(cfg.progress.as_ref(), "estimate")?;
@@ -399,7 +418,6 @@ impl Stages<'_> {
             Plans {
                 solve: built.plan,
                 check,
-                check_matrix,
             },
         ))
     }

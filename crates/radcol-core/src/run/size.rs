@@ -63,21 +63,6 @@ pub fn mesh_size(
     }
 }
 
-/// The adaptive loop keeps a step's check rows (f_c·n × N, twice the
-/// geometric matrix at r = 1) for the next step only while the old and new
-/// ones together take at most this fraction of the memory available:
-/// where they fit, the estimate integrates only the pairs that changed
-/// (it is otherwise most of a step: on the Cornell box at 7 710 unknowns
-/// 11.8 s of 17 s), and where they do not, nothing is lost but that time.
-const CHECK_STORE_FRACTION: f64 = 0.25;
-
-/// Whether check rows of `bytes` are kept for the next adaptive step
-/// (old and new within [`CHECK_STORE_FRACTION`] of the memory available);
-/// otherwise the estimate fills them block by block and keeps nothing.
-pub(crate) fn check_rows_stored(bytes: f64) -> bool {
-    available_memory().is_none_or(|a| 2.0 * bytes <= CHECK_STORE_FRACTION * a as f64)
-}
-
 /// Bytes of memory available, from /proc/meminfo on Linux.
 pub fn available_memory() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
@@ -168,8 +153,8 @@ pub fn process_memory() -> Option<(u64, u64)> {
 /// The peak comes after the matrix is filled: either while the linear
 /// solver runs (LU's factors, one more n × n copy; GMRES's Krylov basis) or
 /// while the error estimate runs (its plan, pairing the check points with
-/// the same elements, about as large as the solve's; and with `keep_check`,
-/// its check rows), whichever is larger.
+/// the same elements, about as large as the solve's, and a row block per
+/// thread), whichever is larger.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct MemoryUse {
     /// Resident bytes once the plan was built (scene, mesh, visibility,
@@ -193,17 +178,14 @@ pub struct MemoryUse {
 impl MemoryUse {
     /// The prediction for N `unknowns`, a plan of `plan_bytes`, `solver`
     /// (GMRES keeping `krylov` vectors of N: `restart` + 4 per channel, the
-    /// channels run in lockstep), and the estimate when `estimate` (keeping
-    /// `check_rows` rows of N when `keep_check`).
-    #[allow(clippy::too_many_arguments)]
+    /// channels run in lockstep), and the estimate when `estimate` (its
+    /// plan).
     pub fn predict(
         unknowns: usize,
         plan_bytes: u64,
         solver: SolverKind,
         krylov: usize,
         estimate: bool,
-        check_rows: usize,
-        keep_check: bool,
     ) -> Self {
         let n = unknowns as f64;
         let after_plan_bytes = process_memory().map_or(0.0, |(rss, _)| rss as f64);
@@ -212,17 +194,7 @@ impl MemoryUse {
             SolverKind::Lu => matrix_bytes,
             SolverKind::Gmres => 8.0 * n * krylov as f64,
         };
-        let check_bytes = 8.0 * check_rows as f64 * n;
-        let estimate_bytes = if estimate {
-            plan_bytes as f64
-                + if keep_check && check_rows_stored(check_bytes) {
-                    check_bytes
-                } else {
-                    0.0
-                }
-        } else {
-            0.0
-        };
+        let estimate_bytes = if estimate { plan_bytes as f64 } else { 0.0 };
         Self {
             after_plan_bytes,
             plan_bytes: plan_bytes as f64,
@@ -303,18 +275,18 @@ mod tests {
     fn the_peak_is_the_matrix_and_the_larger_of_solver_and_estimate() {
         // N = 1000: 8 MB of matrix; LU 8 MB more; GMRES (restart 30, one
         // channel) 34·8 kB.
-        let lu = MemoryUse::predict(1000, 5_000_000, SolverKind::Lu, 34, true, 2000, false);
+        let lu = MemoryUse::predict(1000, 5_000_000, SolverKind::Lu, 34, true);
         let to_come = lu.predicted_peak_bytes - lu.after_plan_bytes;
         assert_eq!(
             (lu.matrix_bytes, lu.solver_bytes, lu.estimate_bytes),
             (8e6, 8e6, 5e6)
         );
         assert_eq!(to_come, 16e6);
-        let gm = MemoryUse::predict(1000, 5_000_000, SolverKind::Gmres, 34, true, 2000, true);
-        // The estimate's plan and its 2000 kept check rows win over GMRES.
-        assert_eq!(gm.estimate_bytes, 5e6 + 16e6);
-        assert_eq!(gm.predicted_peak_bytes - gm.after_plan_bytes, 8e6 + 21e6);
-        let none = MemoryUse::predict(1000, 5_000_000, SolverKind::Gmres, 34, false, 2000, true);
+        let gm = MemoryUse::predict(1000, 5_000_000, SolverKind::Gmres, 34, true);
+        // The estimate's plan wins over GMRES.
+        assert_eq!(gm.estimate_bytes, 5e6);
+        assert_eq!(gm.predicted_peak_bytes - gm.after_plan_bytes, 8e6 + 5e6);
+        let none = MemoryUse::predict(1000, 5_000_000, SolverKind::Gmres, 34, false);
         assert_eq!(
             none.predicted_peak_bytes - none.after_plan_bytes,
             8e6 + 8.0 * 1000.0 * 34.0

@@ -2,20 +2,18 @@
 //! the unknowns budget.
 
 use super::{AdaptOptions, StopReason};
-use crate::run::size::{available_memory, check_rows_stored};
+use crate::run::size::available_memory;
 use crate::run::SolveConfig;
 
 /// While a step assembles, solves and estimates, the previous step's matrix
 /// and plans are still held (they count as used in the memory available when
 /// the step is planned), and the step's matrix, its linear solver's working
-/// memory (an LU factorisation: one more matrix) or its estimate's check rows
-/// (f_c of them per element against N columns: twice the matrix at r = 1,
-/// held only where they are kept for the next step), the larger, come on
-/// top. Those may take at most this fraction of the
-/// memory available. Counting the matrix alone (at 0.6) let the Cornell box
-/// to 1e-4 plan a step of 10.2 GiB whose check rows needed 22.8 GiB more,
-/// which the step's own peak check then refused; such a refusal now also ends
-/// the loop with the previous step's answer.
+/// memory (an LU factorisation: one more matrix) comes on top. Those may
+/// take at most this fraction of the memory available. (While the estimate
+/// kept its check rows for the next step, they counted too: the Cornell
+/// box to 1e-4 once planned a step of 10.2 GiB whose check rows needed
+/// 22.8 GiB more, which the step's own peak check then refused; such a
+/// refusal still ends the loop with the previous step's answer.)
 const STEP_MEMORY_FRACTION: f64 = 0.8;
 
 /// How many of the `marked` elements may be split (each adds 3 elements of
@@ -32,11 +30,6 @@ pub(super) fn budget(
         crate::run::SolverKind::Gmres => 0.0,
         crate::run::SolverKind::Lu => 1.0,
     };
-    let check = if cfg.estimate {
-        crate::estimate::check_nodes(cfg.degree, cfg.alpha).len() as f64 / f as f64
-    } else {
-        0.0
-    };
     // Where the pipeline may compress (GMRES, not --operator dense), a step
     // whose dense matrix does not fit is solved compressed; the plan's pair
     // table (as expected: pair_table_bytes) is what is known to be needed, and
@@ -50,14 +43,7 @@ pub(super) fn budget(
             return !cfg.check_memory
                 || available.is_none_or(|a| pairs <= STEP_MEMORY_FRACTION * a as f64);
         }
-        let matrix = 8.0 * (n as f64).powi(2);
-        // Check rows held only where they are kept for the next step.
-        let check = if check_rows_stored(check * matrix) {
-            check
-        } else {
-            0.0
-        };
-        let bytes = (1.0 + f64::max(solver, check)) * matrix;
+        let bytes = (1.0 + solver) * 8.0 * (n as f64).powi(2);
         !cfg.check_memory || available.is_none_or(|a| bytes <= STEP_MEMORY_FRACTION * a as f64)
     };
     let unknowns = |split: usize| ((elements + 3 * split) * f) as u64;

@@ -11,8 +11,9 @@
 //! at the new nodes, and takes the classes, occluder candidates and matrix
 //! entries of pairs of unchanged elements from the previous solve
 //! ([`AssemblyPlan::updating`](crate::assembly::AssemblyPlan::updating)):
-//! only the rows and columns of new elements are integrated, and the
-//! estimate's check rows likewise where they fit in memory. Elements whose
+//! only the rows and columns of new elements are integrated. The estimate
+//! is updated from the previous step's where u_n changed little away from
+//! the new elements ([`crate::estimate::estimate_updated`]). Elements whose
 //! estimate stops falling under refinement are no longer split
 //! (`history.rs`); the loop then names where they are.
 
@@ -21,7 +22,9 @@ mod history;
 mod options;
 
 pub use history::{singular_points, SingularPoint, STALL_RATIO};
-pub use options::{AdaptOptions, MARK_FRACTION, MAX_FRACTION, MIN_SIZE, STALL_GENERATIONS};
+pub use options::{
+    AdaptOptions, ESTIMATE_WITHIN, MARK_FRACTION, MAX_FRACTION, MIN_SIZE, STALL_GENERATIONS,
+};
 
 use super::pipeline::{solve_step, Plans, Previous};
 use super::{discretize, SolveConfig, SolveOutcome};
@@ -30,6 +33,7 @@ use crate::error::Error;
 use crate::geometry::barycentric_st;
 use crate::mesh::Mesh;
 use crate::problem::Problem;
+use crate::solution::Solution;
 use budget::budget;
 use history::History;
 use serde::Serialize;
@@ -144,6 +148,7 @@ pub fn solve_adaptive(
                 outcome,
                 plans,
                 unchanged: unchanged.clone(),
+                estimate_within: opts.estimate_within * opts.mark_fraction * opts.target,
             });
         let result = solve_step(
             problem,
@@ -152,7 +157,6 @@ pub fn solve_adaptive(
             backend,
             guess.as_deref(),
             prev.as_ref(),
-            true,
         );
         drop(prev);
         let (out, plans) = match result {
@@ -396,26 +400,28 @@ pub fn refine(mesh: &Mesh, split: &[usize]) -> (Mesh, Vec<usize>) {
 
 /// The previous solution of every channel at the nodes of `refined`.
 fn transfer(out: &SolveOutcome, refined: &Mesh, parents: &[usize]) -> Vec<Vec<f64>> {
-    let disc = &out.discretization;
+    out.channels
+        .iter()
+        .map(|ch| on_refined(&ch.solution, refined, parents))
+        .collect()
+}
+
+/// `solution` at the nodes of `refined` (a mesh [`refine`] made from its
+/// mesh, each element's `parents` element): on each element, its parent's
+/// polynomial.
+pub fn on_refined(solution: &Solution, refined: &Mesh, parents: &[usize]) -> Vec<f64> {
+    let disc = solution.discretization();
     let old = disc.mesh();
     let nodes = disc.nodes();
     let mut at = Vec::with_capacity(refined.len() * nodes.len());
     for (k, e) in refined.elements().iter().enumerate() {
-        let parent = &old.elements()[parents[k]];
-        let [a, b, c] = parent.param;
+        let [a, b, c] = old.elements()[parents[k]].param;
         for &[s, t] in nodes.points() {
-            let st = barycentric_st(a, b, c, e.param_point(s, t)).unwrap_or([s, t]);
-            at.push((parents[k], st));
+            let [s, t] = barycentric_st(a, b, c, e.param_point(s, t)).unwrap_or([s, t]);
+            at.push(solution.eval(parents[k], s, t));
         }
     }
-    out.channels
-        .iter()
-        .map(|ch| {
-            at.iter()
-                .map(|&(k, [s, t])| ch.solution.eval(k, s, t))
-                .collect()
-        })
-        .collect()
+    at
 }
 
 #[cfg(test)]

@@ -42,6 +42,11 @@ pub struct AdaptOptions {
     /// to 1e-3: 12 steps and 14 973 unknowns with the depth limit alone, 9
     /// steps and 7 710 unknowns with 3 stalled generations).
     pub stall_generations: u32,
+    /// A step's estimate may be updated from the previous step's instead of
+    /// computed afresh ([`crate::estimate::estimate_updated`]) when it is
+    /// then within this fraction of the marking threshold
+    /// (`mark_fraction · target`) of the computed one (0: computed always).
+    pub estimate_within: f64,
 }
 
 /// The default [`AdaptOptions::mark_fraction`]. At 0.5, with an estimate
@@ -57,6 +62,9 @@ pub const MARK_FRACTION: f64 = 0.8;
 /// r = 3: 4.3e-3, 3.6e-3, 2.5e-3, 3.3e-3, 3.9e-4), which three froze
 /// (r = 3 stopped at 3.4e-3 against a 1e-3 target).
 pub const STALL_GENERATIONS: u32 = 4;
+
+/// The default [`AdaptOptions::estimate_within`].
+pub const ESTIMATE_WITHIN: f64 = 0.05;
 
 /// The default [`AdaptOptions::max_fraction`].
 pub const MAX_FRACTION: f64 = 0.25;
@@ -74,6 +82,7 @@ impl Default for AdaptOptions {
             max_fraction: MAX_FRACTION,
             min_size: MIN_SIZE,
             stall_generations: STALL_GENERATIONS,
+            estimate_within: ESTIMATE_WITHIN,
         }
     }
 }
