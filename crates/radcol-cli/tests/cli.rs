@@ -1255,10 +1255,12 @@ fn predicted_peak_memory_is_within_ten_percent_of_the_measured_one() {
             assert_eq!(num(m, "matrix_bytes"), num(sampled, "bytes"), "{j}");
             assert!(num(sampled, "sampled_blocks") < 0.2 * num(sampled, "admissible_blocks"));
         } else {
-            // At these sizes the plan's partly visible pairs weigh as much
-            // as the matrix: a prediction of the matrix alone would be far
-            // off.
-            assert!(num(m, "matrix_bytes") < 0.6 * measured, "{m}");
+            // At these sizes the plan's partly visible pairs and the
+            // process's own memory weigh enough that a prediction of the
+            // matrix alone would fall outside the 10 % asked above (on the
+            // CPU backend, --max-edge 120: 116 MB of matrix against a
+            // 148 MB peak).
+            assert!(num(m, "matrix_bytes") < 0.9 * measured, "{m}");
         }
     }
 }
