@@ -26,17 +26,18 @@
 //! default allowance, and elements that would have stayed below it were
 //! split (the Cornell box to 3e-4: 21 steps against 18, to 28 689 unknowns
 //! against 27 132). Where the drift would pass what the caller allows, or
-//! where the update would fill more than [`UPDATE_SHARE`] of the columns,
-//! the caller computes afresh.
+//! where the update would fill more than [`UPDATE_SHARE`] of the pairs a
+//! fresh estimate fills, the caller computes afresh.
 
 use super::{by_channel, contract, summaries, ChannelFields, ErrorEstimate};
 use crate::assembly::AssemblyPlan;
 use rayon::prelude::*;
 
-/// Above this share of the elements (new ones, and unchanged ones whose
-/// change is not small) an update is not worth it: the estimate is
-/// computed afresh.
-pub const UPDATE_SHARE: f64 = 1.0 / 3.0;
+/// Above this share of a fresh estimate's pairs (the rows of new elements
+/// against every column, the rest against the columns filled: new
+/// elements and unchanged ones whose change is not small) an update is not
+/// worth it: the estimate is computed afresh.
+pub const UPDATE_SHARE: f64 = 0.8;
 
 /// The estimate of every channel on the mesh of `check` (a plan
 /// [`AssemblyPlan::at_points`] updated from the previous step's, so that it
@@ -45,7 +46,7 @@ pub const UPDATE_SHARE: f64 = 1.0 / 3.0;
 /// channel, u_n - g at the nodes: g the previous solution on this mesh).
 /// `within` is how far (relative to max |u_n| of each channel) the figures
 /// may be from the computed ones. None where that cannot be kept, or where
-/// the update would fill more than [`UPDATE_SHARE`] of the columns.
+/// the update would fill more than [`UPDATE_SHARE`] of the pairs.
 pub fn estimate_updated(
     check: &AssemblyPlan,
     channels: &[ChannelFields<'_>],
@@ -105,8 +106,10 @@ pub fn estimate_updated(
             }
         }
     }
-    let filled = wanted.iter().filter(|&&w| w).count();
-    if filled as f64 > UPDATE_SHARE * n as f64 {
+    let filled = wanted.iter().filter(|&&w| w).count() as f64;
+    let new = (0..n).filter(|&k| unchanged.old(k).is_none()).count() as f64;
+    let n = n as f64;
+    if (n - new) * filled + new * n > UPDATE_SHARE * n * n {
         return None;
     }
     let ku = updated_ku(check, channels, previous, change, &wanted);
