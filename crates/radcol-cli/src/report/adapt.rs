@@ -103,6 +103,9 @@ impl fmt::Display for AdaptLine<'_> {
                 sci(s.estimate_elsewhere)
             )?;
         }
+        if let Some(b) = s.estimate_updated_within {
+            write!(f, ", estimate updated (within {})", sci(b))?;
+        }
         Ok(())
     }
 }

@@ -86,7 +86,8 @@ pub fn estimate_updated(
         budgets.push((left / 2.0, lebesgue_check * rho));
     }
     // The columns filled: new elements, and unchanged ones whose change in
-    // some channel exceeds half what that channel has left.
+    // some channel exceeds half what that channel has left; the others'
+    // largest change is what this update adds.
     let mut wanted = vec![false; n];
     let mut added = vec![0.0f64; channels.len()];
     for (k, w) in wanted.iter_mut().enumerate() {
@@ -94,15 +95,17 @@ pub fn estimate_updated(
             *w = true;
             continue;
         }
-        for (c, delta) in change.iter().enumerate() {
-            let sup = lebesgue
-                * delta[k * f..(k + 1) * f]
-                    .iter()
-                    .fold(0.0f64, |m, d| m.max(d.abs()));
-            if sup > budgets[c].0 {
-                *w = true;
-            } else {
-                added[c] = added[c].max(sup);
+        let sups: Vec<f64> = change
+            .iter()
+            .map(|delta| {
+                let nodal = delta[k * f..(k + 1) * f].iter();
+                lebesgue * nodal.fold(0.0f64, |m, d| m.max(d.abs()))
+            })
+            .collect();
+        *w = sups.iter().zip(&budgets).any(|(s, b)| *s > b.0);
+        if !*w {
+            for (a, s) in added.iter_mut().zip(&sups) {
+                *a = a.max(*s);
             }
         }
     }

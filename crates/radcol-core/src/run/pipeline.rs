@@ -179,8 +179,9 @@ fn settle(
 }
 
 /// Estimates every channel's error at the check points of its mesh
-/// ([`crate::estimate`]), with the solve's quadrature and visibility; returns
-/// the check points' plan.
+/// ([`crate::estimate`]), with the solve's quadrature and visibility, or
+/// updates `previous`'s estimate where it allows and that pays ([`update`]);
+/// returns the check points' plan.
 fn estimate_channels(
     problem: &Problem,
     cfg: &SolveConfig,

@@ -190,6 +190,7 @@ mod tests {
             singular_elements: 0,
             estimate_elsewhere: estimate,
             seconds,
+            estimate_updated_within: None,
         };
         let s = adaptive_settings(2, &[step(1e-2, None, 1.0), step(1e-3, Some(2e-3), 2.5)]);
         assert_eq!(s[1].refinement, Refinement::Adaptive { step: 2 });

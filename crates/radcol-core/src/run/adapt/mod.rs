@@ -97,6 +97,10 @@ pub struct AdaptStep {
     pub estimate_elsewhere: f64,
     /// Wall seconds of the solve, estimate included.
     pub seconds: f64,
+    /// When the estimate was updated from the previous step's instead of
+    /// computed: at most how far from the computed one (relative to max
+    /// |u_n|, worst channel).
+    pub estimate_updated_within: Option<f64>,
 }
 
 /// The last solve and how the loop got there.
@@ -326,6 +330,12 @@ fn describe(
             .count(),
         estimate_elsewhere: splittable_max(indicator, frozen),
         seconds: 0.0,
+        estimate_updated_within: out
+            .channels
+            .iter()
+            .filter_map(|c| c.estimate.as_ref())
+            .filter_map(|e| e.updated_within.map(|b| b / e.scale.max(f64::MIN_POSITIVE)))
+            .reduce(f64::max),
     }
 }
 
