@@ -55,6 +55,9 @@ pub fn estimate_updated(
     within: f64,
 ) -> Option<Vec<ErrorEstimate>> {
     let unchanged = check.unchanged()?;
+    if previous.len() != channels.len() || change.len() != channels.len() {
+        return None;
+    }
     let disc = check.discretization();
     let n = disc.mesh().len();
     let f = disc.nodes_per_element();
