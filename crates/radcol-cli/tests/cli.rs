@@ -696,6 +696,13 @@ fn target_error_refines_adaptively() {
     assert!(true_err <= 2e-2 && true_err > 0.0, "true error {true_err}");
     assert_eq!(num(&v, "unknowns") as u64, num(last, "unknowns") as u64);
     assert!(num(&steps[0], "unknowns") < num(last, "unknowns"));
+    // Each step says where its seconds went: stages within its wall time.
+    for s in steps {
+        let t = &s["timings"];
+        let stages = num(t, "assembly_s") + num(t, "solve_s") + num(t, "estimate_s");
+        assert!(stages > 0.0 && stages <= num(s, "seconds"), "{s}");
+        assert_eq!(s["operator"], "dense", "{s}");
+    }
     for bad in ["0", "-1e-3", "NaN", "1", "1.5"] {
         assert_one_line_error(
             &["solve", "sphere", "--target-error", bad],

@@ -2,6 +2,7 @@
 
 use super::{sci, secs};
 use radcol_core::run::adapt::{AdaptOptions, AdaptOutcome, AdaptStep, SingularPoint, StopReason};
+use radcol_core::run::OperatorKind;
 use serde::Serialize;
 use std::fmt;
 
@@ -106,6 +107,18 @@ impl fmt::Display for AdaptLine<'_> {
         if let Some(b) = s.estimate_updated_within {
             write!(f, ", estimate updated (within {})", sci(b))?;
         }
+        let t = &s.timings;
+        write!(
+            f,
+            " [{} operator {}, solve {}, estimate {}]",
+            match s.operator {
+                OperatorKind::Dense => "dense",
+                OperatorKind::Compressed => "compressed",
+            },
+            secs(t.assembly_s),
+            secs(t.solve_s),
+            secs(t.estimate_s)
+        )?;
         Ok(())
     }
 }

@@ -27,7 +27,7 @@ pub use options::{
 };
 
 use super::pipeline::{solve_step, Plans, Previous};
-use super::{discretize, SolveConfig, SolveOutcome};
+use super::{discretize, OperatorKind, SolveConfig, SolveOutcome, Timings};
 use crate::assembly::{AssemblyBackend, Unchanged};
 use crate::error::Error;
 use crate::geometry::barycentric_st;
@@ -101,6 +101,10 @@ pub struct AdaptStep {
     /// computed: at most how far from the computed one (relative to max
     /// |u_n|, worst channel).
     pub estimate_updated_within: Option<f64>,
+    /// The solve's seconds per stage (assembly, linear solves, estimate).
+    pub timings: Timings,
+    /// Dense or compressed geometric operator.
+    pub operator: OperatorKind,
 }
 
 /// The last solve and how the loop got there.
@@ -336,6 +340,8 @@ fn describe(
             .filter_map(|c| c.estimate.as_ref())
             .filter_map(|e| e.updated_within.map(|b| b / e.scale.max(f64::MIN_POSITIVE)))
             .reduce(f64::max),
+        timings: out.timings,
+        operator: out.operator.kind(),
     }
 }
 
