@@ -61,7 +61,7 @@ impl fmt::Display for OperatorReport {
             ),
             Some(s) => writeln!(
                 f,
-                "  operator    compressed, {} ({:.2} % of dense), product error {:.1e} at {SAMPLED_ROWS} rows: {} low-rank blocks (max rank {}{}), {} dense, {} zero (shadowed); predicted {} from the geometry, {} from the plan, {}; {}",
+                "  operator    compressed, {} ({:.2} % of dense), product error {:.1e} at {SAMPLED_ROWS} rows: {} low-rank blocks (max rank {}{}), {} dense, {} zero (shadowed){}; predicted {} from the geometry, {} from the plan, {}; {}",
                 gb(self.bytes as f64),
                 100.0 * s.compression(),
                 self.sampled_error.unwrap_or(f64::NAN),
@@ -74,6 +74,11 @@ impl fmt::Display for OperatorReport {
                 },
                 s.dense_blocks,
                 s.zero_blocks,
+                if s.reused_blocks > 0 {
+                    format!(", {} taken from the previous step's", s.reused_blocks)
+                } else {
+                    String::new()
+                },
                 gb(self.predicted_bytes.unwrap_or(f64::NAN)),
                 gb(self.planned_bytes.unwrap_or(f64::NAN)),
                 match &self.sampled_size {

@@ -142,6 +142,117 @@ impl ClusterTree {
     pub fn root(&self) -> &Cluster {
         &self.clusters[0]
     }
+
+    /// The tree of a changed set of items (with these `boxes`) made from
+    /// this one, so that the clusters the change did not touch stay as
+    /// they were: new item i takes the place of old item `near[i]` (itself
+    /// when `same[i]`; for an item of a refined element, an item of the
+    /// element it was split from). Each old leaf holds the items placed in
+    /// it, in the old order; a leaf grown past `leaf_size` is split as in
+    /// [`ClusterTree::new`]. Returns the tree and, for each of its
+    /// clusters, the old cluster with the same items in the same order
+    /// (hence the same box), if there is one; None when an old leaf would
+    /// be left empty.
+    pub fn updated(
+        &self,
+        boxes: &[Aabb],
+        near: &[usize],
+        same: &[bool],
+        leaf_size: usize,
+    ) -> Option<(Self, Vec<Option<usize>>)> {
+        let old_n = self.order.len();
+        let mut position = vec![0; old_n];
+        for (p, &i) in self.order.iter().enumerate() {
+            position[i] = p;
+        }
+        // Where each old item went: kept as itself, and how many new items
+        // were placed at its position.
+        let mut kept = vec![false; old_n];
+        let mut placed = vec![0usize; old_n];
+        for (i, (&o, &s)) in near.iter().zip(same).enumerate() {
+            assert!(o < old_n, "new item {i} placed at old item {o} of {old_n}");
+            kept[o] |= s;
+            placed[o] += 1;
+        }
+        let mut order: Vec<usize> = (0..boxes.len()).collect();
+        order.sort_by_key(|&i| (position[near[i]], !same[i], i));
+        let mut tree = Self {
+            clusters: Vec::new(),
+            order,
+        };
+        let mut old_of = Vec::new();
+        let mut at = 0;
+        let walk = Walk {
+            old: self,
+            boxes,
+            kept: &kept,
+            placed: &placed,
+            leaf: leaf_size.max(1),
+        };
+        walk.rebuild(0, &mut tree, &mut old_of, &mut at)?;
+        old_of.resize(tree.clusters.len(), None);
+        Some((tree, old_of))
+    }
+}
+
+/// What [`ClusterTree::updated`] walks the old tree with.
+struct Walk<'a> {
+    old: &'a ClusterTree,
+    boxes: &'a [Aabb],
+    kept: &'a [bool],
+    placed: &'a [usize],
+    leaf: usize,
+}
+
+impl Walk<'_> {
+    /// Rebuilds old cluster `c` into `tree` (its items from position `at`
+    /// of the new order on), recording in `old_of` which new clusters equal
+    /// old ones; returns the new cluster's index, None when a leaf is left
+    /// empty.
+    fn rebuild(
+        &self,
+        c: usize,
+        tree: &mut ClusterTree,
+        old_of: &mut Vec<Option<usize>>,
+        at: &mut usize,
+    ) -> Option<usize> {
+        let old = &self.old.clusters[c];
+        let Some([l, r]) = old.children else {
+            let items = &self.old.order[old.start..old.end];
+            let n: usize = items.iter().map(|&o| self.placed[o]).sum();
+            if n == 0 {
+                return None;
+            }
+            let start = *at;
+            *at += n;
+            let id = tree.split(self.boxes, start, *at, self.leaf);
+            let same = n == items.len() && items.iter().all(|&o| self.kept[o]);
+            old_of.resize(tree.clusters.len(), None);
+            old_of[id] = same.then_some(c);
+            return Some(id);
+        };
+        let id = tree.clusters.len();
+        tree.clusters.push(Cluster {
+            start: *at,
+            end: *at,
+            bbox: Aabb::EMPTY,
+            children: None,
+        });
+        old_of.resize(tree.clusters.len(), None);
+        let left = self.rebuild(l, tree, old_of, at)?;
+        let right = self.rebuild(r, tree, old_of, at)?;
+        let (a, b) = (&tree.clusters[left], &tree.clusters[right]);
+        let (end, bbox) = (b.end, a.bbox.union(b.bbox));
+        tree.clusters[id] = Cluster {
+            start: a.start,
+            end,
+            bbox,
+            children: Some([left, right]),
+        };
+        let same = old_of[left] == Some(l) && old_of[right] == Some(r);
+        old_of[id] = same.then_some(c);
+        Some(id)
+    }
 }
 
 #[cfg(test)]
@@ -182,6 +293,93 @@ mod tests {
         // The first split is along x, the longest side.
         let [l, r] = tree.root().children.unwrap();
         assert!(tree.clusters[l].bbox.hi.x <= tree.clusters[r].bbox.lo.x);
+    }
+
+    /// A tree updated after a few items are each replaced by four nearby
+    /// ones is a valid cluster tree, and the clusters away from them are the
+    /// old ones: the same items in the same order with the same box.
+    #[test]
+    fn an_updated_tree_keeps_the_clusters_a_change_did_not_touch() {
+        let at = |i: usize| {
+            let t = i as f64 * 0.618_033_988_75;
+            point(t.fract(), (t * 7.3).fract() * 0.1, (t * 3.1).fract())
+        };
+        let old_boxes: Vec<Aabb> = (0..1000).map(at).collect();
+        let old = ClusterTree::new(&old_boxes, 16);
+        let replaced = [3, 500, 501, 977];
+        let (mut boxes, mut near, mut same) = (Vec::new(), Vec::new(), Vec::new());
+        for (o, b) in old_boxes.iter().enumerate() {
+            let children = if replaced.contains(&o) { 4 } else { 1 };
+            for k in 0..children {
+                let d = if children == 1 {
+                    0.0
+                } else {
+                    1e-3 * (k as f64 - 1.5)
+                };
+                boxes.push(Aabb {
+                    lo: b.lo + DVec3::new(d, -d, d),
+                    hi: b.hi + DVec3::new(d, -d, d),
+                });
+                near.push(o);
+                same.push(children == 1);
+            }
+        }
+        let (tree, old_of) = old
+            .updated(&boxes, &near, &same, 16)
+            .expect("no leaf emptied");
+        let mut sorted = tree.order.clone();
+        sorted.sort_unstable();
+        assert_eq!(
+            sorted,
+            (0..boxes.len()).collect::<Vec<_>>(),
+            "a permutation"
+        );
+        let mut kept = 0;
+        for (c, o) in tree.clusters.iter().zip(&old_of) {
+            let items = &tree.order[c.start..c.end];
+            let hull = items.iter().fold(Aabb::EMPTY, |b, &i| b.union(boxes[i]));
+            assert_eq!(c.bbox, hull);
+            match c.children {
+                Some([l, r]) => {
+                    let (l, r) = (&tree.clusters[l], &tree.clusters[r]);
+                    assert_eq!((l.start, l.end, r.end), (c.start, r.start, c.end));
+                }
+                None => assert!(c.len() <= 16),
+            }
+            if let Some(o) = *o {
+                assert!(items.iter().all(|&i| same[i]), "kept, so untouched");
+                let oc = &old.clusters[o];
+                let mapped: Vec<usize> = items.iter().map(|&i| near[i]).collect();
+                assert_eq!(mapped, old.order[oc.start..oc.end]);
+                assert_eq!(c.bbox, oc.bbox);
+                kept += 1;
+            }
+        }
+        // Every old cluster without a replaced item is kept.
+        let untouched = old
+            .clusters
+            .iter()
+            .filter(|c| {
+                !old.order[c.start..c.end]
+                    .iter()
+                    .any(|o| replaced.contains(o))
+            })
+            .count();
+        assert_eq!(kept, untouched);
+        assert!(
+            kept + 4 * 8 >= old.clusters.len(),
+            "{kept} of {}",
+            old.clusters.len()
+        );
+        // An old leaf left empty is refused.
+        let leaf = old.clusters.iter().find(|c| c.children.is_none()).unwrap();
+        let left: Vec<usize> = (0..1000)
+            .filter(|o| !old.order[leaf.start..leaf.end].contains(o))
+            .collect();
+        let boxes: Vec<Aabb> = left.iter().map(|&o| old_boxes[o]).collect();
+        assert!(old
+            .updated(&boxes, &left, &vec![true; left.len()], 16)
+            .is_none());
     }
 
     #[test]

@@ -12,6 +12,8 @@ use super::{Entries, Structure};
 pub(super) struct Leaf {
     pub(super) rows: std::ops::Range<usize>,
     pub(super) cols: std::ops::Range<usize>,
+    /// Its row and column clusters.
+    pub(super) block: (u32, u32),
     pub(super) data: LeafData,
 }
 
@@ -132,6 +134,7 @@ pub(super) fn leaf(
     Leaf {
         rows: rc.start..rc.end,
         cols: cc.start..cc.end,
+        block: (r as u32, c as u32),
         data,
     }
 }

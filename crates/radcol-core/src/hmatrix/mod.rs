@@ -22,6 +22,7 @@ pub mod cluster;
 mod leaf;
 mod predict;
 pub mod radiosity;
+pub mod reuse;
 mod sample;
 
 use cluster::{Aabb, ClusterTree};
@@ -31,6 +32,7 @@ use serde::Serialize;
 use std::ops::ControlFlow;
 
 pub use predict::HPrediction;
+pub use reuse::{Changed, Reuse};
 pub use sample::{SampledSize, MIN_PER_CLASS, SAMPLE_STRIDE};
 
 /// What is known of a matrix's blocks without computing an entry: which
@@ -110,6 +112,8 @@ pub struct HStats {
     pub max_rank: usize,
     /// Numbers stored (dense entries plus (m + n) k per low-rank block).
     pub stored: u64,
+    /// Leaves taken from a previous matrix ([`reuse`]) instead of computed.
+    pub reused_blocks: usize,
 }
 
 impl HStats {
@@ -150,8 +154,8 @@ impl HStats {
 /// A hierarchical matrix.
 #[derive(Clone, Debug)]
 pub struct HMatrix {
-    row_order: Vec<usize>,
-    col_order: Vec<usize>,
+    rt: ClusterTree,
+    ct: ClusterTree,
     leaves: Vec<Leaf>,
     stats: HStats,
 }
@@ -167,7 +171,7 @@ impl HMatrix {
         entries: &dyn Entries,
         opts: &HOptions,
     ) -> Self {
-        let built = Self::build_checked(row_boxes, col_boxes, entries, opts, |_| {
+        let built = Self::build_checked(row_boxes, col_boxes, entries, opts, None, |_| {
             Ok::<(), std::convert::Infallible>(())
         });
         match built {
@@ -181,10 +185,10 @@ impl HMatrix {
         self.stats
     }
 
-    /// Heap bytes of the stored numbers and orders.
+    /// Heap bytes of the stored numbers, the cluster trees and the leaves'
+    /// records.
     pub fn heap_bytes(&self) -> u64 {
-        8 * (self.stats.stored + (self.row_order.len() + self.col_order.len()) as u64)
-            + (self.leaves.len() * std::mem::size_of::<Leaf>()) as u64
+        8 * self.stats.stored + index_bytes(&self.rt, &self.ct, self.leaves.len()) as u64
     }
 
     /// The relative error of y = A x over `rows` sample rows, for a fixed
@@ -239,7 +243,7 @@ impl HMatrix {
         }
         let xp: Vec<Vec<f64>> = xs
             .iter()
-            .map(|x| self.col_order.iter().map(|&j| x[j]).collect())
+            .map(|x| self.ct.order.iter().map(|&j| x[j]).collect())
             .collect();
         let yp = self
             .leaves
@@ -261,7 +265,7 @@ impl HMatrix {
                 },
             );
         for (y, yp) in ys.iter_mut().zip(yp.chunks_exact(m)) {
-            for (p, &i) in self.row_order.iter().enumerate() {
+            for (p, &i) in self.rt.order.iter().enumerate() {
                 y[i] = yp[p];
             }
         }
@@ -284,14 +288,47 @@ fn partition(
 ) -> (ClusterTree, ClusterTree, ControlFlow<()>) {
     let rt = ClusterTree::new(row_boxes, opts.leaf_size);
     let ct = ClusterTree::new(col_boxes, opts.leaf_size);
-    let flow = if row_boxes.is_empty() || col_boxes.is_empty() {
+    let flow = visit_blocks(&rt, &ct, structure, opts, visit);
+    (rt, ct, flow)
+}
+
+/// The leaves of the block tree of `rt` and `ct` visited until `visit`
+/// breaks (none when either is empty), and whether it did.
+fn visit_blocks(
+    rt: &ClusterTree,
+    ct: &ClusterTree,
+    structure: &dyn Structure,
+    opts: &HOptions,
+    visit: &mut Visit<'_>,
+) -> ControlFlow<()> {
+    if rt.order.is_empty() || ct.order.is_empty() {
         ControlFlow::Continue(())
     } else {
-        block_tree(&rt, &ct, 0, 0, opts.eta, structure, &mut |r, c, a| {
-            visit(&rt, &ct, r, c, a)
+        block_tree(rt, ct, 0, 0, opts.eta, structure, &mut |r, c, a| {
+            visit(rt, ct, r, c, a)
         })
-    };
-    (rt, ct, flow)
+    }
+}
+
+/// The runs of consecutive numbers in `sorted`, as ranges.
+fn consecutive_runs(sorted: &[usize]) -> Vec<std::ops::Range<usize>> {
+    let mut runs: Vec<std::ops::Range<usize>> = Vec::new();
+    for &k in sorted {
+        match runs.last_mut() {
+            Some(r) if r.end == k => r.end = k + 1,
+            _ => runs.push(k..k + 1),
+        }
+    }
+    runs
+}
+
+/// Bytes of the trees `rt` and `ct` and of `leaves` leaf records: what a
+/// matrix holds besides its numbers.
+fn index_bytes(rt: &ClusterTree, ct: &ClusterTree, leaves: usize) -> usize {
+    let cluster = std::mem::size_of::<cluster::Cluster>();
+    8 * (rt.order.len() + ct.order.len())
+        + cluster * (rt.clusters.len() + ct.clusters.len())
+        + std::mem::size_of::<Leaf>() * leaves
 }
 
 /// Visits the leaves of the block tree under (r, c): (row cluster, column

@@ -3,7 +3,7 @@
 //! hours its entries would take.
 
 use super::cluster::Aabb;
-use super::{dense_leaf_numbers, partition, HMatrix, HOptions, Leaf, Structure};
+use super::{dense_leaf_numbers, index_bytes, partition, HMatrix, HOptions, Leaf, Structure};
 use serde::Serialize;
 use std::ops::ControlFlow;
 
@@ -48,11 +48,11 @@ impl HMatrix {
         let mut p = HPrediction {
             near_bytes: 0.0,
             far_min_bytes: 0.0,
-            index_bytes: 8.0 * (row_boxes.len() + col_boxes.len()) as f64,
+            index_bytes: 0.0,
             complete: true,
         };
-        let record = std::mem::size_of::<Leaf>() as f64;
-        let (_, _, flow) = partition(
+        let (mut leaves, record) = (0, std::mem::size_of::<Leaf>() as f64);
+        let (rt, ct, flow) = partition(
             row_boxes,
             col_boxes,
             structure,
@@ -60,6 +60,7 @@ impl HMatrix {
             &mut |rt, ct, r, c, admissible| {
                 let (rc, cc) = (&rt.clusters[r], &ct.clusters[c]);
                 let (m, n) = (rc.len() as f64, cc.len() as f64);
+                leaves += 1;
                 p.index_bytes += record;
                 if admissible {
                     p.far_min_bytes += 8.0 * (m + n);
@@ -79,6 +80,7 @@ impl HMatrix {
                 }
             },
         );
+        p.index_bytes = index_bytes(&rt, &ct, leaves) as f64;
         p.complete = flow.is_continue();
         p
     }

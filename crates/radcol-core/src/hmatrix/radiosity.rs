@@ -5,8 +5,10 @@
 //! the plan culled (facing away, or hidden) zero without a kernel call.
 
 use super::cluster::Aabb;
+use super::consecutive_runs;
+use super::reuse::with_elements;
 use super::{Entries, HMatrix, HOptions, HPrediction, SampledSize, Structure};
-use crate::assembly::plan::{AssemblyPlan, PairClass};
+use crate::assembly::plan::{AssemblyPlan, PairClass, Unchanged};
 use crate::discretization::Discretization;
 use glam::DVec3;
 use std::collections::HashMap;
@@ -55,19 +57,24 @@ impl<'a> PlanEntries<'a> {
         HMatrix::build(&rows, &cols, self, opts)
     }
 
-    /// The hierarchical matrix of the plan, with its size predicted from a
-    /// sample of its blocks and passed to `check` before the rest are
-    /// computed ([`HMatrix::build_checked`]).
+    /// The hierarchical matrix of the plan, its size predicted from a sample
+    /// of its blocks and passed to `check` before the rest are computed
+    /// ([`HMatrix::build_checked`]); blocks untouched since `previous` (the
+    /// matrix, same `opts`, of the mesh this one refines) taken from it.
     ///
     /// # Errors
     /// What `check` returns.
     pub fn build_checked<E>(
         &self,
         opts: &HOptions,
+        previous: Option<(&HMatrix, &Unchanged)>,
         check: impl FnOnce(&SampledSize) -> Result<(), E>,
     ) -> Result<(HMatrix, SampledSize), E> {
         let (rows, cols) = self.boxes();
-        HMatrix::build_checked(&rows, &cols, self, opts, check)
+        let f = self.plan.discretization().nodes_per_element();
+        with_elements(previous, f, |reuse| {
+            HMatrix::build_checked(&rows, &cols, self, opts, reuse, check)
+        })
     }
 }
 
@@ -286,17 +293,6 @@ impl PlanEntries<'_> {
             })
         })
     }
-}
-
-fn consecutive_runs(sorted: &[usize]) -> Vec<std::ops::Range<usize>> {
-    let mut runs: Vec<std::ops::Range<usize>> = Vec::new();
-    for &k in sorted {
-        match runs.last_mut() {
-            Some(r) if r.end == k => r.end = k + 1,
-            _ => runs.push(k..k + 1),
-        }
-    }
-    runs
 }
 
 /// The boxes of `disc`'s rows (its collocation points) and columns (each

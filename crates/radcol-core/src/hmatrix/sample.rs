@@ -9,9 +9,11 @@
 //! counted with the rows and columns their structure proves zero left out,
 //! as they are stored.
 
-use super::cluster::{Aabb, ClusterTree};
+use super::cluster::Aabb;
+use super::reuse::{Reuse, Trees};
 use super::{
-    dense_leaf_numbers, leaf, partition, Entries, HMatrix, HOptions, HStats, Leaf, Structure,
+    dense_leaf_numbers, index_bytes, leaf, visit_blocks, Entries, HMatrix, HOptions, HStats, Leaf,
+    Structure,
 };
 use rayon::prelude::*;
 use serde::Serialize;
@@ -44,7 +46,10 @@ impl HMatrix {
     /// As [`HMatrix::build`], but first builds a sample of the admissible
     /// blocks and predicts the whole matrix's size from it
     /// ([`SampledSize`]); `check` sees that prediction before the other
-    /// blocks are computed and can stop the build with its error.
+    /// blocks are computed and can stop the build with its error. With
+    /// `reuse`, the blocks a local change of the rows and columns did not
+    /// touch are taken from the previous matrix ([`super::reuse`]) and
+    /// counted exactly.
     ///
     /// # Errors
     /// What `check` returns.
@@ -53,17 +58,30 @@ impl HMatrix {
         col_boxes: &[Aabb],
         entries: &dyn Entries,
         opts: &HOptions,
+        reuse: Option<&Reuse<'_>>,
         check: impl FnOnce(&SampledSize) -> Result<(), E>,
     ) -> Result<(Self, SampledSize), E> {
-        let t = Blocks::new(row_boxes, col_boxes, entries, opts);
+        let t = Blocks::new(row_boxes, col_boxes, entries, opts, reuse);
         let classes = t.classes();
         let sample: Vec<usize> = classes.values().flat_map(|c| systematic(c)).collect();
         let make = |b: usize| {
             let (r, c, a) = t.blocks[b];
-            leaf(&t.rt, &t.ct, r, c, a, t.zero[b], entries, opts.tol)
+            match (reuse, t.reused[b]) {
+                (Some(p), Some(k)) => p.leaf(k, &t.trees, r, c),
+                _ => leaf(
+                    &t.trees.rt,
+                    &t.trees.ct,
+                    r,
+                    c,
+                    a,
+                    t.zero[b],
+                    entries,
+                    opts.tol,
+                ),
+            }
         };
         let built: Vec<Leaf> = sample.par_iter().map(|&b| make(b)).collect();
-        let size = t.predict(&classes, &built, entries);
+        let size = t.predict(&classes, &built, entries, reuse);
         check(&size)?;
         let mut leaves: Vec<Option<Leaf>> = vec![None; t.blocks.len()];
         for (&b, l) in sample.iter().zip(built) {
@@ -81,10 +99,11 @@ impl HMatrix {
             .map(|l| l.expect("every block built"))
             .collect();
         let admissible: Vec<bool> = t.blocks.iter().map(|b| b.2).collect();
-        let stats = HStats::of(&leaves, &admissible, (row_boxes.len(), col_boxes.len()));
+        let mut stats = HStats::of(&leaves, &admissible, (row_boxes.len(), col_boxes.len()));
+        stats.reused_blocks = t.reused.iter().flatten().count();
         let h = Self {
-            row_order: t.rt.order,
-            col_order: t.ct.order,
+            rt: t.trees.rt,
+            ct: t.trees.ct,
             leaves,
             stats,
         };
@@ -92,55 +111,71 @@ impl HMatrix {
     }
 }
 
-/// The block tree's leaves, before any is built.
+/// The block tree of a build: its cluster trees, its leaves (row cluster,
+/// column cluster, admissible), which the structure proves zero, and which
+/// are taken from a previous matrix (its leaf's index).
 struct Blocks {
-    rt: ClusterTree,
-    ct: ClusterTree,
-    /// (row cluster, column cluster, admissible).
+    trees: Trees,
     blocks: Vec<(usize, usize, bool)>,
-    /// Proved zero by the structure.
     zero: Vec<bool>,
+    reused: Vec<Option<usize>>,
 }
 
 impl Blocks {
-    fn new(row_boxes: &[Aabb], col_boxes: &[Aabb], entries: &dyn Entries, opts: &HOptions) -> Self {
+    fn new(
+        row_boxes: &[Aabb],
+        col_boxes: &[Aabb],
+        entries: &dyn Entries,
+        opts: &HOptions,
+        reuse: Option<&Reuse<'_>>,
+    ) -> Self {
+        let trees = reuse
+            .and_then(|p| p.trees(row_boxes, col_boxes, opts.leaf_size))
+            .unwrap_or_else(|| Trees::new(row_boxes, col_boxes, opts.leaf_size));
         let mut blocks = Vec::new();
-        let (rt, ct, _) = partition(row_boxes, col_boxes, entries, opts, &mut |_, _, r, c, a| {
+        let _ = visit_blocks(&trees.rt, &trees.ct, entries, opts, &mut |_, _, r, c, a| {
             blocks.push((r, c, a));
             ControlFlow::Continue(())
         });
+        let reused = match reuse {
+            Some(p) => p.leaves_of(&trees, &blocks),
+            None => vec![None; blocks.len()],
+        };
+        let (rt, ct) = (&trees.rt, &trees.ct);
         let zero = blocks
             .par_iter()
-            .map(|&(r, c, _)| {
+            .zip(&reused)
+            .map(|(&(r, c, _), old)| {
                 let (rc, cc) = (&rt.clusters[r], &ct.clusters[c]);
-                entries.is_zero(
-                    &rt.order[rc.start..rc.end],
-                    &rc.bbox,
-                    &ct.order[cc.start..cc.end],
-                    &cc.bbox,
-                )
+                old.is_none()
+                    && entries.is_zero(
+                        &rt.order[rc.start..rc.end],
+                        &rc.bbox,
+                        &ct.order[cc.start..cc.end],
+                        &cc.bbox,
+                    )
             })
             .collect();
         Self {
-            rt,
-            ct,
+            trees,
             blocks,
             zero,
+            reused,
         }
     }
 
     /// Entries of block `b`.
     fn entries(&self, b: usize) -> f64 {
         let (r, c, _) = self.blocks[b];
-        (self.rt.clusters[r].len() * self.ct.clusters[c].len()) as f64
+        (self.trees.rt.clusters[r].len() * self.trees.ct.clusters[c].len()) as f64
     }
 
-    /// Admissible, non-zero blocks by size class (log2 of m n), in block
-    /// order: neighbours in the order are neighbours in space.
+    /// The admissible blocks to be computed (not zero, not reused), by
+    /// size class (log2 of their entries), in block-tree order.
     fn classes(&self) -> BTreeMap<u32, Vec<usize>> {
         let mut classes: BTreeMap<u32, Vec<usize>> = BTreeMap::new();
         for (b, blk) in self.blocks.iter().enumerate() {
-            if blk.2 && !self.zero[b] {
+            if blk.2 && !self.zero[b] && self.reused[b].is_none() {
                 let class = (self.entries(b) as u64).max(1).ilog2();
                 classes.entry(class).or_default().push(b);
             }
@@ -148,27 +183,36 @@ impl Blocks {
         classes
     }
 
-    /// The size predicted from `built`, the sample of `classes` in their
-    /// order: orders, leaf records and dense leaves exactly, each class by
-    /// the sample's stored share of its entries.
+    /// The whole build's size: dense leaves and index exactly, reused
+    /// leaves as stored, each class of admissible blocks from its
+    /// `built` sample (in the order of `classes`).
     fn predict(
         &self,
         classes: &BTreeMap<u32, Vec<usize>>,
         built: &[Leaf],
         structure: &dyn Structure,
+        reuse: Option<&Reuse<'_>>,
     ) -> SampledSize {
-        let dense: u64 = self
-            .blocks
-            .par_iter()
-            .zip(&self.zero)
-            .filter(|&(blk, &z)| !blk.2 && !z)
-            .map(|(&(r, c, _), _)| {
-                let (rc, cc) = (&self.rt.clusters[r], &self.ct.clusters[c]);
-                dense_leaf_numbers(&self.rt.order, rc, &self.ct.order, cc, structure)
+        let (rt, ct) = (&self.trees.rt, &self.trees.ct);
+        let dense: u64 = (0..self.blocks.len())
+            .into_par_iter()
+            .filter(|&b| !self.blocks[b].2 && !self.zero[b] && self.reused[b].is_none())
+            .map(|b| {
+                let (r, c, _) = self.blocks[b];
+                let (rc, cc) = (&rt.clusters[r], &ct.clusters[c]);
+                dense_leaf_numbers(&rt.order, rc, &ct.order, cc, structure)
             })
             .sum();
-        let mut bytes = 8.0 * (self.rt.order.len() + self.ct.order.len() + dense as usize) as f64
-            + (self.blocks.len() * std::mem::size_of::<Leaf>()) as f64;
+        let kept: u64 = match reuse {
+            Some(p) => self
+                .reused
+                .iter()
+                .flatten()
+                .map(|&k| p.previous.leaves[k].stored())
+                .sum(),
+            None => 0,
+        };
+        let mut bytes = 8.0 * (dense + kept) as f64 + index_bytes(rt, ct, self.blocks.len()) as f64;
         let (mut at, mut seen_all, mut all) = (0, 0.0, 0.0);
         for members in classes.values() {
             let part = &built[at..at + systematic(members).len()];
@@ -262,7 +306,8 @@ mod tests {
             ..Default::default()
         };
         let (h, size) =
-            HMatrix::build_checked(&boxes, &boxes, &entries, &opts, |_| Ok::<(), ()>(())).unwrap();
+            HMatrix::build_checked(&boxes, &boxes, &entries, &opts, None, |_| Ok::<(), ()>(()))
+                .unwrap();
         let built = h.heap_bytes() as f64;
         let s = h.stats();
         assert!(s.low_rank_blocks > 100 && s.low_rank_failed > 0, "{s:?}");
@@ -279,7 +324,8 @@ mod tests {
         assert!(tree.bytes() < 0.9 * built, "{tree:?} against {built}");
 
         entries.asked.store(0, Ordering::Relaxed);
-        let refused = HMatrix::build_checked(&boxes, &boxes, &entries, &opts, |z| Err(z.bytes));
+        let refused =
+            HMatrix::build_checked(&boxes, &boxes, &entries, &opts, None, |z| Err(z.bytes));
         assert_eq!(refused.unwrap_err(), size.bytes);
         let asked = entries.asked.load(Ordering::Relaxed) as f64;
         assert!(asked > 0.0 && asked < 0.05 * (n * n) as f64, "{asked}");

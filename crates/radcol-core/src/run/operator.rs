@@ -4,6 +4,7 @@
 
 use super::size::{available_memory, MemoryEstimate, MemoryUse};
 use super::{SolveConfig, SolverKind};
+use crate::assembly::plan::Unchanged;
 use crate::assembly::AssemblyPlan;
 use crate::discretization::Discretization;
 use crate::error::InputError;
@@ -291,6 +292,7 @@ fn count_limit(available: Option<u64>) -> f64 {
 pub(crate) fn build_compressed(
     plan: &AssemblyPlan,
     cfg: &SolveConfig,
+    previous: Option<(&HMatrix, &Unchanged)>,
     decision: &mut OperatorDecision,
     memory: &mut MemoryUse,
 ) -> Result<(HMatrix, u64), InputError> {
@@ -304,7 +306,7 @@ pub(crate) fn build_compressed(
     if cfg.check_memory {
         memory.check(available)?;
     }
-    let (h, sampled) = entries.build_checked(&cfg.compression, |s| {
+    let (h, sampled) = entries.build_checked(&cfg.compression, previous, |s| {
         *memory = memory.with_matrix(Some(s.bytes));
         match cfg.check_memory {
             true => memory.check(available),

@@ -112,7 +112,8 @@ fn assemble(
     }
     let dense_previous = previous.and_then(|p| p.outcome.operator.dense());
     let (operator, kernel_evals, device_seconds, info) = if compressed {
-        let (h, evals) = build_compressed(&plan, cfg, &mut decision, &mut memory)?;
+        let reuse = previous.and_then(|p| Some((p.outcome.operator.compressed()?, &*p.unchanged)));
+        let (h, evals) = build_compressed(&plan, cfg, reuse, &mut decision, &mut memory)?;
         (
             GeometricOperator::Compressed(h),
             evals,

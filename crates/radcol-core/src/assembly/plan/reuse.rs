@@ -21,6 +21,9 @@ const NEW: u32 = u32::MAX;
 pub struct Unchanged {
     old_of: Vec<u32>,
     new_of: Vec<u32>,
+    /// For each element of the refined mesh, the old element it is or was
+    /// split from, when known ([`Unchanged::refined`]).
+    parent_of: Option<Vec<u32>>,
 }
 
 impl Unchanged {
@@ -44,7 +47,36 @@ impl Unchanged {
                 None => NEW,
             })
             .collect();
-        Self { old_of, new_of }
+        Self {
+            old_of,
+            new_of,
+            parent_of: None,
+        }
+    }
+
+    /// From a refinement: each element of the refined mesh with the old
+    /// element it is or was split from (`parents`), and which old elements
+    /// were `split`.
+    ///
+    /// # Panics
+    /// When a parent is out of range, or an unsplit one is named twice.
+    pub fn refined(parents: &[usize], split: &[bool]) -> Self {
+        let old_of: Vec<Option<usize>> =
+            parents.iter().map(|&p| (!split[p]).then_some(p)).collect();
+        Self {
+            parent_of: Some(parents.iter().map(|&p| p as u32).collect()),
+            ..Self::new(&old_of, split.len())
+        }
+    }
+
+    /// Element `k` of the refined mesh's old element, or the one it was
+    /// split from (None when not known).
+    #[inline]
+    pub fn parent(&self, k: usize) -> Option<usize> {
+        match &self.parent_of {
+            Some(p) => Some(p[k] as usize),
+            None => self.old(k),
+        }
     }
 
     /// Element `k` of the refined mesh in the old mesh, when unchanged.
@@ -139,6 +171,14 @@ mod tests {
             (Some(0), None, Some(3))
         );
         assert_eq!((u.len(), u.old_len()), (4, 3));
+        assert_eq!((u.parent(0), u.parent(1)), (Some(0), None));
+        // Old element 1 split into new 1..5; 0 and 2 kept.
+        let r = Unchanged::refined(&[0, 1, 1, 1, 1, 2], &[false, true, false]);
+        assert_eq!((r.old(0), r.old(2), r.old(5)), (Some(0), None, Some(2)));
+        assert_eq!(
+            (r.parent(2), r.parent(5), r.new_index(1)),
+            (Some(1), Some(2), None)
+        );
     }
 
     #[test]

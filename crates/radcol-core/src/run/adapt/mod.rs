@@ -217,7 +217,7 @@ pub fn solve_adaptive(
         guess = Some(transfer(&out, &refined, &parents));
         let split_mark = marks(mesh.len(), &marked[..split]);
         history = history.refined(&parents, &split_mark, &indicator);
-        let unchanged = Arc::new(unchanged_of(&parents, &split_mark));
+        let unchanged = Arc::new(Unchanged::refined(&parents, &split_mark));
         previous = Some((out, plans, unchanged));
         pending_singular = singular;
         mesh = Arc::new(refined);
@@ -243,13 +243,6 @@ fn marks(n: usize, split: &[usize]) -> Vec<bool> {
         m[k] = true;
     }
     m
-}
-
-/// Which elements of the refined mesh (each with its `parents` element) are
-/// elements of the old one: those whose parent was not split.
-fn unchanged_of(parents: &[usize], split: &[bool]) -> Unchanged {
-    let old_of: Vec<Option<usize>> = parents.iter().map(|&p| (!split[p]).then_some(p)).collect();
-    Unchanged::new(&old_of, split.len())
 }
 
 /// What marking knows of each element: its `indicator`, whether it is
