@@ -61,7 +61,7 @@ impl fmt::Display for OperatorReport {
             ),
             Some(s) => writeln!(
                 f,
-                "  operator    compressed, {} ({:.2} % of dense), product error {:.1e} at {SAMPLED_ROWS} rows: {} low-rank blocks (max rank {}{}), {} dense, {} zero (shadowed){}; predicted {} from the geometry, {} from the plan, {}; {}",
+                "  operator    compressed, {} ({:.2} % of dense), product error {:.1e} at {SAMPLED_ROWS} rows: {} low-rank blocks (max rank {}{}), {} dense, {} zero (shadowed){}; predicted {} from the geometry, {}, {}; {}",
                 gb(self.bytes as f64),
                 100.0 * s.compression(),
                 self.sampled_error.unwrap_or(f64::NAN),
@@ -80,7 +80,10 @@ impl fmt::Display for OperatorReport {
                     String::new()
                 },
                 gb(self.predicted_bytes.unwrap_or(f64::NAN)),
-                gb(self.planned_bytes.unwrap_or(f64::NAN)),
+                match self.planned_bytes {
+                    Some(b) => format!("{} from the plan", gb(b)),
+                    None => "not from the plan (taken from the previous step)".into(),
+                },
                 match &self.sampled_size {
                     Some(z) => format!(
                         "{} from {} of its {} low-rank candidates built first ({:.1} % of their entries)",

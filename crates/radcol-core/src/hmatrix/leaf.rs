@@ -14,6 +14,9 @@ pub(super) struct Leaf {
     pub(super) cols: std::ops::Range<usize>,
     /// Its row and column clusters.
     pub(super) block: (u32, u32),
+    /// Whether it is an admissible block (low rank, or left dense when its
+    /// cross did not pay).
+    pub(super) admissible: bool,
     pub(super) data: LeafData,
 }
 
@@ -135,6 +138,7 @@ pub(super) fn leaf(
         rows: rc.start..rc.end,
         cols: cc.start..cc.end,
         block: (r as u32, c as u32),
+        admissible,
         data,
     }
 }

@@ -288,23 +288,25 @@ fn partition(
 ) -> (ClusterTree, ClusterTree, ControlFlow<()>) {
     let rt = ClusterTree::new(row_boxes, opts.leaf_size);
     let ct = ClusterTree::new(col_boxes, opts.leaf_size);
-    let flow = visit_blocks(&rt, &ct, structure, opts, visit);
+    let flow = visit_blocks(&rt, &ct, structure, opts, &mut |_, _| false, visit);
     (rt, ct, flow)
 }
 
 /// The leaves of the block tree of `rt` and `ct` visited until `visit`
-/// breaks (none when either is empty), and whether it did.
+/// breaks (none when either is empty), and whether it did; the nodes for
+/// which `take` returns true are left to it ([`block_tree`]).
 fn visit_blocks(
     rt: &ClusterTree,
     ct: &ClusterTree,
     structure: &dyn Structure,
     opts: &HOptions,
+    take: &mut dyn FnMut(usize, usize) -> bool,
     visit: &mut Visit<'_>,
 ) -> ControlFlow<()> {
     if rt.order.is_empty() || ct.order.is_empty() {
         ControlFlow::Continue(())
     } else {
-        block_tree(rt, ct, 0, 0, opts.eta, structure, &mut |r, c, a| {
+        block_tree(rt, ct, 0, 0, opts.eta, structure, take, &mut |r, c, a| {
             visit(rt, ct, r, c, a)
         })
     }
@@ -333,7 +335,9 @@ fn index_bytes(rt: &ClusterTree, ct: &ClusterTree, leaves: usize) -> usize {
 
 /// Visits the leaves of the block tree under (r, c): (row cluster, column
 /// cluster, admissible), until `visit` breaks. An admissible pair that is
-/// not [`Structure::smooth`] is subdivided like an inadmissible one.
+/// not [`Structure::smooth`] is subdivided like an inadmissible one. A node
+/// for which `take` returns true is left to it, subtree and all.
+#[allow(clippy::too_many_arguments)]
 fn block_tree(
     rt: &ClusterTree,
     ct: &ClusterTree,
@@ -341,8 +345,12 @@ fn block_tree(
     c: usize,
     eta: f64,
     structure: &dyn Structure,
+    take: &mut dyn FnMut(usize, usize) -> bool,
     visit: &mut dyn FnMut(usize, usize, bool) -> ControlFlow<()>,
 ) -> ControlFlow<()> {
+    if take(r, c) {
+        return ControlFlow::Continue(());
+    }
     let (rc, cc) = (&rt.clusters[r], &ct.clusters[c]);
     let dist = rc.bbox.distance(&cc.bbox);
     if dist > 0.0
@@ -356,7 +364,7 @@ fn block_tree(
     {
         return visit(r, c, true);
     }
-    let mut recurse = |r, c| block_tree(rt, ct, r, c, eta, structure, visit);
+    let mut recurse = |r, c| block_tree(rt, ct, r, c, eta, structure, take, visit);
     match (rc.children, cc.children) {
         (None, None) => visit(r, c, false),
         (Some(rs), None) => rs.iter().try_for_each(|&r| recurse(r, c)),

@@ -108,28 +108,27 @@ impl Reuse<'_> {
         })
     }
 
-    /// For each block (row cluster, column cluster) of `trees`, the index of
-    /// the previous matrix's leaf of the same two clusters, if both are
-    /// untouched and that pair was a leaf.
-    pub(super) fn leaves_of(
-        &self,
-        trees: &Trees,
-        blocks: &[(usize, usize, bool)],
-    ) -> Vec<Option<usize>> {
-        let old: HashMap<(u32, u32), usize> = self
-            .previous
-            .leaves
-            .iter()
-            .enumerate()
-            .map(|(k, l)| (l.block, k))
-            .collect();
-        blocks
-            .iter()
-            .map(|&(r, c, _)| {
-                let (or, oc) = (trees.row_old[r]?, trees.col_old[c]?);
-                old.get(&(or as u32, oc as u32)).copied()
-            })
-            .collect()
+    /// What the block-tree walk of `trees` needs to take whole subtrees
+    /// of the previous matrix.
+    pub(super) fn taken(&self, trees: &Trees) -> Taken<'_> {
+        let new_of = |old: &[Option<usize>], n: usize| {
+            let mut m = vec![None; n];
+            for (k, o) in old.iter().enumerate() {
+                if let Some(o) = *o {
+                    m[o] = Some(k);
+                }
+            }
+            m
+        };
+        let p = self.previous;
+        Taken {
+            previous: p,
+            corner: (p.leaves.iter().enumerate())
+                .map(|(k, l)| ((l.rows.start as u32, l.cols.start as u32), k))
+                .collect(),
+            row_new: new_of(&trees.row_old, p.rt.clusters.len()),
+            col_new: new_of(&trees.col_old, p.ct.clusters.len()),
+        }
     }
 
     /// Leaf `k` of the previous matrix as the leaf of clusters `r` and `c`
@@ -140,10 +139,66 @@ impl Reuse<'_> {
             rows: rc.start..rc.end,
             cols: cc.start..cc.end,
             block: (r as u32, c as u32),
+            admissible: self.previous.leaves[k].admissible,
             data: self.previous.leaves[k].data.clone(),
         }
     }
 }
+
+/// The previous matrix's leaves by their first row and column (leaves
+/// partition the matrix, so each pair starts one), and its clusters in the
+/// new trees where untouched.
+pub(super) struct Taken<'a> {
+    previous: &'a HMatrix,
+    corner: HashMap<(u32, u32), usize>,
+    row_new: Vec<Option<usize>>,
+    col_new: Vec<Option<usize>>,
+}
+
+impl Taken<'_> {
+    /// When clusters `r` and `c` of `trees` are both untouched and were a
+    /// node of the previous block tree: pushes that node's leaves onto
+    /// `out` (as leaves of the new clusters, with their previous index) and
+    /// returns true. The node's decisions and its subtree's depend on its
+    /// two clusters alone, so they are the previous ones. Its leaves are
+    /// consecutive in the previous matrix (block-tree order) from the one
+    /// at its first row and column; when that one does not lie within both
+    /// clusters, the pair was no node (an ancestor was a leaf), and nothing
+    /// is taken.
+    pub(super) fn subtree(&self, trees: &Trees, r: usize, c: usize, out: &mut Found) -> bool {
+        let (Some(or), Some(oc)) = (trees.row_old[r], trees.col_old[c]) else {
+            return false;
+        };
+        let p = self.previous;
+        let (rc, cc) = (&p.rt.clusters[or], &p.ct.clusters[oc]);
+        let inside = |l: &Leaf| {
+            rc.start <= l.rows.start
+                && l.rows.end <= rc.end
+                && cc.start <= l.cols.start
+                && l.cols.end <= cc.end
+        };
+        let Some(&first) = self.corner.get(&(rc.start as u32, cc.start as u32)) else {
+            return false;
+        };
+        if !inside(&p.leaves[first]) {
+            return false;
+        }
+        for (k, l) in p.leaves.iter().enumerate().skip(first) {
+            if !inside(l) {
+                break;
+            }
+            let (lr, lc) = (l.block.0 as usize, l.block.1 as usize);
+            let (nr, nc) = (self.row_new[lr], self.col_new[lc]);
+            let (nr, nc) = (nr.expect("untouched"), nc.expect("untouched"));
+            out.push(((nr, nc, l.admissible), Some(k)));
+        }
+        true
+    }
+}
+
+/// Leaves found by a block-tree walk, in its order: (row cluster, column
+/// cluster, admissible), and the previous leaf each is, if taken.
+pub(super) type Found = Vec<((usize, usize, bool), Option<usize>)>;
 
 impl Trees {
     /// Fresh trees (nothing to take from a previous matrix).

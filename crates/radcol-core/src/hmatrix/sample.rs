@@ -17,6 +17,7 @@ use super::{
 };
 use rayon::prelude::*;
 use serde::Serialize;
+use std::cell::RefCell;
 use std::collections::BTreeMap;
 use std::ops::ControlFlow;
 
@@ -132,15 +133,19 @@ impl Blocks {
         let trees = reuse
             .and_then(|p| p.trees(row_boxes, col_boxes, opts.leaf_size))
             .unwrap_or_else(|| Trees::new(row_boxes, col_boxes, opts.leaf_size));
-        let mut blocks = Vec::new();
-        let _ = visit_blocks(&trees.rt, &trees.ct, entries, opts, &mut |_, _, r, c, a| {
-            blocks.push((r, c, a));
-            ControlFlow::Continue(())
-        });
-        let reused = match reuse {
-            Some(p) => p.leaves_of(&trees, &blocks),
-            None => vec![None; blocks.len()],
+        // Leaves in block-tree order, each with the previous leaf it is.
+        let found = RefCell::new(Vec::new());
+        let taken = reuse.map(|p| p.taken(&trees));
+        let mut take = |r, c| match &taken {
+            Some(t) => t.subtree(&trees, r, c, &mut found.borrow_mut()),
+            None => false,
         };
+        let mut visit = |_: &_, _: &_, r, c, a| {
+            found.borrow_mut().push(((r, c, a), None));
+            ControlFlow::Continue(())
+        };
+        let _ = visit_blocks(&trees.rt, &trees.ct, entries, opts, &mut take, &mut visit);
+        let (blocks, reused): (Vec<_>, Vec<_>) = found.into_inner().into_iter().unzip();
         let (rt, ct) = (&trees.rt, &trees.ct);
         let zero = blocks
             .par_iter()

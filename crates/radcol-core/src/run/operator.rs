@@ -298,13 +298,19 @@ pub(crate) fn build_compressed(
 ) -> Result<(HMatrix, u64), InputError> {
     let entries = PlanEntries::new(plan);
     let available = available_memory().filter(|_| cfg.check_memory);
-    let planned = entries
-        .predict(&cfg.compression, count_limit(available))
-        .bytes();
-    decision.planned_bytes = Some(planned);
-    *memory = memory.with_matrix(Some(planned));
-    if cfg.check_memory {
-        memory.check(available)?;
+    // Counted over the plan's block tree before any block is computed;
+    // not when blocks are taken from the previous step's operator, where
+    // that walk would cost more than the blocks built (the sample below
+    // still checks before most are).
+    if previous.is_none() {
+        let planned = entries
+            .predict(&cfg.compression, count_limit(available))
+            .bytes();
+        decision.planned_bytes = Some(planned);
+        *memory = memory.with_matrix(Some(planned));
+        if cfg.check_memory {
+            memory.check(available)?;
+        }
     }
     let (h, sampled) = entries.build_checked(&cfg.compression, previous, |s| {
         *memory = memory.with_matrix(Some(s.bytes));
