@@ -24,7 +24,7 @@ use radcol_core::nodes::NodeSet;
 use radcol_core::run::adapt::{on_refined, refine};
 use radcol_core::scene::builtin;
 use radcol_core::solution::Solution;
-use radcol_core::visibility;
+use radcol_core::visibility::{self, VisibilityAnalysis};
 use std::sync::Arc;
 
 /// `mesh` with every `every`-th element from `first` split: the refined
@@ -45,11 +45,21 @@ fn split_every(
     (Arc::new(refined), parents, old_of, unchanged)
 }
 
-fn check(surface: Arc<radcol_core::geometry::Surface>, level: u32, degree: usize, what: &str) {
+/// What each check starts from: the surface's visibility, the default
+/// quadrature, the degree's nodes (α = 0.1) and the mesh at `level`.
+fn start(
+    surface: Arc<radcol_core::geometry::Surface>,
+    level: u32,
+    degree: usize,
+) -> (VisibilityAnalysis, QuadratureOptions, NodeSet, Arc<Mesh>) {
     let vis = visibility::analyze(&surface);
-    let quad = QuadratureOptions::default();
     let nodes = NodeSet::new(degree, 0.1).unwrap();
-    let mut mesh = Arc::new(Mesh::new(surface, level));
+    let mesh = Arc::new(Mesh::new(surface, level));
+    (vis, QuadratureOptions::default(), nodes, mesh)
+}
+
+fn check(surface: Arc<radcol_core::geometry::Surface>, level: u32, degree: usize, what: &str) {
+    let (vis, quad, nodes, mut mesh) = start(surface, level, degree);
     let disc = Arc::new(Discretization::new(mesh.clone(), nodes.clone()));
     let mut plan = AssemblyPlan::new(disc.clone(), quad.clone(), &vis);
     let mut matrix = CpuBackend.assemble(&plan).unwrap().matrix;
@@ -164,10 +174,7 @@ fn check_update(
     degree: usize,
     what: &str,
 ) {
-    let vis = visibility::analyze(&surface);
-    let quad = QuadratureOptions::default();
-    let nodes = NodeSet::new(degree, 0.1).unwrap();
-    let mesh = Arc::new(Mesh::new(surface, level));
+    let (vis, quad, nodes, mesh) = start(surface, level, degree);
     let disc = Arc::new(Discretization::new(mesh.clone(), nodes.clone()));
     let check_rows = |d: &Arc<Discretization>| {
         Arc::new(Discretization::new(
@@ -320,14 +327,11 @@ fn check_compressed(
     degree: usize,
     what: &str,
 ) {
-    let vis = visibility::analyze(&surface);
-    let quad = QuadratureOptions::default();
-    let nodes = NodeSet::new(degree, 0.1).unwrap();
+    let (vis, quad, nodes, mesh) = start(surface, level, degree);
     let opts = HOptions {
         tol: 1e-8,
         ..Default::default()
     };
-    let mesh = Arc::new(Mesh::new(surface, level));
     let disc = Arc::new(Discretization::new(mesh.clone(), nodes.clone()));
     let plan = AssemblyPlan::new(disc, quad.clone(), &vis);
     let previous = PlanEntries::new(&plan).build(&opts);
