@@ -17,6 +17,7 @@ use radcol_core::estimate::{
     check_nodes, estimate, estimate_updated, ChannelFields, ErrorEstimate,
 };
 use radcol_core::geometry::shapes::sphere;
+use radcol_core::geometry::Surface;
 use radcol_core::hmatrix::radiosity::PlanEntries;
 use radcol_core::hmatrix::HOptions;
 use radcol_core::mesh::Mesh;
@@ -48,7 +49,7 @@ fn split_every(
 /// What each check starts from: the surface's visibility, the default
 /// quadrature, the degree's nodes (α = 0.1) and the mesh at `level`.
 fn start(
-    surface: Arc<radcol_core::geometry::Surface>,
+    surface: Arc<Surface>,
     level: u32,
     degree: usize,
 ) -> (VisibilityAnalysis, QuadratureOptions, NodeSet, Arc<Mesh>) {
@@ -58,7 +59,7 @@ fn start(
     (vis, QuadratureOptions::default(), nodes, mesh)
 }
 
-fn check(surface: Arc<radcol_core::geometry::Surface>, level: u32, degree: usize, what: &str) {
+fn check(surface: Arc<Surface>, level: u32, degree: usize, what: &str) {
     let (vis, quad, nodes, mut mesh) = start(surface, level, degree);
     let disc = Arc::new(Discretization::new(mesh.clone(), nodes.clone()));
     let mut plan = AssemblyPlan::new(disc.clone(), quad.clone(), &vis);
@@ -157,9 +158,15 @@ fn check(surface: Arc<radcol_core::geometry::Surface>, level: u32, degree: usize
 
 #[test]
 fn updated_plans_and_reused_entries_equal_fresh_ones() {
-    let cornell = builtin("cornell").unwrap().unwrap();
-    check(cornell.problem().surface, 0, 1, "cornell r=1");
-    check(Arc::new(sphere(1.0)), 1, 2, "sphere r=2");
+    on_both(check, 0, 1);
+}
+
+/// `check` on the Cornell box at r = 1 (mesh level `cornell`) and on the
+/// unit sphere at r = 2 (level `sphere`).
+fn on_both(check: fn(Arc<Surface>, u32, usize, &str), cornell: u32, sphere_level: u32) {
+    let box_ = builtin("cornell").unwrap().unwrap();
+    check(box_.problem().surface, cornell, 1, "cornell r=1");
+    check(Arc::new(sphere(1.0)), sphere_level, 2, "sphere r=2");
 }
 
 /// An estimate updated from the previous step's
@@ -168,12 +175,7 @@ fn updated_plans_and_reused_entries_equal_fresh_ones() {
 /// on the unchanged elements and much on the new ones; a change too large
 /// everywhere is refused, and so is an update of an estimate whose
 /// allowance is spent.
-fn check_update(
-    surface: Arc<radcol_core::geometry::Surface>,
-    level: u32,
-    degree: usize,
-    what: &str,
-) {
+fn check_update(surface: Arc<Surface>, level: u32, degree: usize, what: &str) {
     let (vis, quad, nodes, mesh) = start(surface, level, degree);
     let disc = Arc::new(Discretization::new(mesh.clone(), nodes.clone()));
     let check_rows = |d: &Arc<Discretization>| {
@@ -308,9 +310,7 @@ fn check_update(
 
 #[test]
 fn updated_estimates_are_within_their_bound_of_computed_ones() {
-    let cornell = builtin("cornell").unwrap().unwrap();
-    check_update(cornell.problem().surface, 1, 1, "cornell r=1");
-    check_update(Arc::new(sphere(1.0)), 1, 2, "sphere r=2");
+    on_both(check_update, 1, 1);
 }
 
 /// The compressed operator of a mesh refined at a few elements, built from
@@ -321,12 +321,7 @@ fn updated_estimates_are_within_their_bound_of_computed_ones() {
 /// matrix's (Cornell box, r = 1, where blocks are zero, shadow-split and
 /// low rank; the sphere, r = 2, with near and self pairs on curved
 /// elements).
-fn check_compressed(
-    surface: Arc<radcol_core::geometry::Surface>,
-    level: u32,
-    degree: usize,
-    what: &str,
-) {
+fn check_compressed(surface: Arc<Surface>, level: u32, degree: usize, what: &str) {
     let (vis, quad, nodes, mesh) = start(surface, level, degree);
     let opts = HOptions {
         tol: 1e-8,
@@ -390,7 +385,5 @@ fn check_compressed(
 
 #[test]
 fn compressed_operators_take_untouched_blocks_from_the_previous_step() {
-    let cornell = builtin("cornell").unwrap().unwrap();
-    check_compressed(cornell.problem().surface, 2, 1, "cornell r=1");
-    check_compressed(Arc::new(sphere(1.0)), 3, 2, "sphere r=2");
+    on_both(check_compressed, 2, 3);
 }
