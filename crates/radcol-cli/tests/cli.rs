@@ -715,6 +715,24 @@ fn target_error_refines_adaptively() {
         2,
         &["--no-estimate"],
     );
+    assert_one_line_error(
+        &[
+            "solve",
+            "sphere",
+            "--target-error",
+            "1e-3",
+            "--max-steps",
+            "0",
+        ],
+        2,
+        &["--max-steps", "at least 1"],
+    );
+    // --max-steps stops the loop after that many solves, and says so.
+    let mut a = args.to_vec();
+    a.extend(["--target-error", "1e-6", "--max-steps", "2"]);
+    let v = stdout_json(&radcol(&a));
+    assert_eq!(v["adaptive"]["stop"], "max_steps");
+    assert_eq!(v["adaptive"]["steps"].as_array().unwrap().len(), 2);
     let dir = scratch("strict");
     let csv = dir.join("u.csv");
     let mut a = args.to_vec();

@@ -54,6 +54,15 @@ pub struct SolveArgs {
     )]
     pub max_unknowns: Option<u64>,
 
+    /// With --target-error: stop after N solves [default: 25].
+    #[arg(
+        help_heading = "Accuracy",
+        long,
+        value_name = "N",
+        requires = "target_error"
+    )]
+    pub max_steps: Option<usize>,
+
     /// With --target-error: fail (exit 1, outputs still written) when the target is not
     /// reached within the budget (a stop where only the neighbourhoods of the singular
     /// points the report names are above it counts as reached).

@@ -60,8 +60,13 @@ impl AdaptReport {
             ),
             _ => String::new(),
         };
+        let flag = match self.stop {
+            StopReason::MaxSteps => " (--max-steps)",
+            StopReason::MaxUnknowns => " (--max-unknowns)",
+            _ => "",
+        };
         format!(
-            "estimated error {}{elsewhere} against the target {} after {} steps: {}",
+            "estimated error {}{elsewhere} against the target {} after {} steps: {}{flag}",
             sci(self.reached_estimate),
             sci(self.target),
             self.steps.len(),

@@ -207,7 +207,7 @@ fn solve_job(a: SolveArgs) -> Result<SolveJob> {
     let look = look(&a)?;
     let adapt = a
         .target_error
-        .map(|t| adapt(t, a.max_unknowns, &problem))
+        .map(|t| adapt(t, (a.max_unknowns, a.max_steps), &problem))
         .transpose()?;
     if adapt.is_some() && !a.relight.is_empty() {
         return Err(bad_input(
@@ -232,10 +232,10 @@ fn solve_job(a: SolveArgs) -> Result<SolveJob> {
     })
 }
 
-/// `--target-error` and its budget.
+/// `--target-error` and its budget (`--max-unknowns`, `--max-steps`).
 fn adapt(
     target: f64,
-    max_unknowns: Option<u64>,
+    (max_unknowns, max_steps): (Option<u64>, Option<usize>),
     p: &ProblemSpec,
 ) -> Result<AdaptOptions, BadInput> {
     if !(target > 0.0 && target < 1.0) {
@@ -246,15 +246,20 @@ fn adapt(
     if max_unknowns == Some(0) {
         return Err(bad_input("--max-unknowns must be at least 1"));
     }
+    if max_steps == Some(0) {
+        return Err(bad_input("--max-steps must be at least 1"));
+    }
     if !p.estimate {
         return Err(bad_input(
             "--target-error refines where the error estimate is large: it cannot be used with --no-estimate",
         ));
     }
+    let default = AdaptOptions::default();
     Ok(AdaptOptions {
         target,
         max_unknowns,
-        ..Default::default()
+        max_steps: max_steps.unwrap_or(default.max_steps),
+        ..default
     })
 }
 
