@@ -37,9 +37,10 @@ pub struct SampledSize {
     pub bytes: f64,
     /// Admissible blocks built in the sample.
     pub sampled_blocks: usize,
-    /// Admissible blocks in all (those the structure proves zero left out).
+    /// Admissible blocks to compute (those the structure proves zero, and
+    /// those taken from a previous matrix, left out).
     pub admissible_blocks: usize,
-    /// The sample's share of the admissible blocks' entries.
+    /// The sample's share of those blocks' entries.
     pub sampled_entries: f64,
 }
 
