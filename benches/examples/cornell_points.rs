@@ -6,10 +6,11 @@
 //! iterated solution û_n = E + K u_n at the points (`radcol_core::query`,
 //! what `radcol solve --at` prints).
 //!
-//!     cargo run --release -p radcol-benches --example cornell_points [-- TARGET]
+//!     cargo run --release -p radcol-benches --example cornell_points [-- TARGET [DEGREE]]
 //!
 //! TARGET (default 1e-2) is `--target-error`'s: adaptive refinement from the
-//! scene's 50 triangles.
+//! scene's 50 triangles, at DEGREE (default 2, `radcol solve`'s with a
+//! target) and its auto α.
 
 use glam::DVec3;
 use radcol_core::assembly::CpuBackend;
@@ -54,10 +55,14 @@ fn main() {
         .nth(1)
         .map(|s| s.parse().expect("TARGET is a number"))
         .unwrap_or(1e-2);
+    let degree: usize = std::env::args()
+        .nth(2)
+        .map(|s| s.parse().expect("DEGREE is 0..=6"))
+        .unwrap_or(2);
     let scene = builtin("cornell").expect("built in").expect("loads");
     let cfg = SolveConfig {
-        degree: 1,
-        alpha: 1.0 / 6.0,
+        degree,
+        alpha: radcol_core::alpha0::auto_alpha(degree),
         level: 0,
         ..Default::default()
     };

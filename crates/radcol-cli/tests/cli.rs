@@ -452,7 +452,7 @@ fn help_documents_defaults() {
     let out = radcol_ok(&["solve", "--help"]);
     let help = String::from_utf8_lossy(&out.stdout);
     for d in [
-        "[default: 1]",
+        "[default: 1; for `solve --target-error`, 2",
         "[default: auto]",
         "[default: 4]",
         "[default: 0.5]",
@@ -688,6 +688,7 @@ fn target_error_refines_adaptively() {
     let v = stdout_json(&radcol(&a));
     let ad = &v["adaptive"];
     assert_eq!(ad["stop"], "reached");
+    assert!(ad["default_degree"].is_null(), "-r 1 was given: {ad}");
     let steps = ad["steps"].as_array().unwrap();
     assert!(steps.len() >= 2, "{steps:?}");
     let last = steps.last().unwrap();
@@ -755,18 +756,22 @@ fn target_error_refines_adaptively() {
 }
 
 /// The built-in shadow scene (umbra and penumbra) reaches 1e-2 adaptively
-/// from its default mesh, and the element estimates shrink where it split.
+/// from its default mesh, and the element estimates shrink where it split;
+/// with a target and no `--degree` the degree is 2, and the report says so.
 #[test]
 fn shadow_scene_reaches_its_target() {
-    let v = stdout_json(&radcol(&[
-        "solve",
-        "shadow",
-        "--target-error",
-        "1e-2",
-        "--json",
-    ]));
+    let args = ["solve", "shadow", "--target-error", "1e-2"];
+    let v = stdout_json(&radcol(&[&args[..], &["--json"]].concat()));
     let ad = &v["adaptive"];
     assert_eq!(ad["stop"], "reached", "{ad}");
+    assert_eq!(v["degree"], 2);
+    assert_eq!(ad["default_degree"], 2);
+    let text =
+        String::from_utf8_lossy(&radcol_ok(&[&args[..], &["-q"]].concat()).stdout).into_owned();
+    assert!(
+        text.contains("r = 2: the default with a target (--degree R sets it)"),
+        "{text}"
+    );
     assert!(num(ad, "reached_estimate") <= 1e-2);
     assert_eq!(v["visibility"]["needed"], true);
     for ch in v["channels"].as_array().unwrap() {

@@ -13,6 +13,8 @@ pub struct AdaptReport {
     target: f64,
     /// The unknowns budget, when given.
     max_unknowns: Option<u64>,
+    /// The degree, when the target chose it (`--degree` not given).
+    default_degree: Option<usize>,
     /// The estimate reached (worst channel, relative max).
     reached_estimate: f64,
     /// Why it stopped.
@@ -26,11 +28,13 @@ pub struct AdaptReport {
 }
 
 impl AdaptReport {
-    /// The report of `res`, run with `opts`.
-    pub fn new(opts: &AdaptOptions, res: &AdaptOutcome) -> Self {
+    /// The report of `res`, run with `opts`; `default_degree`: the degree
+    /// when the target chose it.
+    pub fn new(opts: &AdaptOptions, res: &AdaptOutcome, default_degree: Option<usize>) -> Self {
         Self {
             target: opts.target,
             max_unknowns: opts.max_unknowns,
+            default_degree,
             reached_estimate: res.steps.last().map_or(f64::NAN, |s| s.estimate),
             stop: res.stop,
             steps: res.steps.clone(),
@@ -132,10 +136,13 @@ impl fmt::Display for AdaptReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
-            "  adaptive    target {} (max error / max |u|, estimated){}",
+            "  adaptive    target {} (max error / max |u|, estimated){}{}",
             sci(self.target),
             self.max_unknowns
                 .map(|m| format!(", at most {m} unknowns"))
+                .unwrap_or_default(),
+            self.default_degree
+                .map(|r| format!(", r = {r}: the default with a target (--degree R sets it)"))
                 .unwrap_or_default()
         )?;
         for s in &self.steps {

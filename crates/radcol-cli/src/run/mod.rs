@@ -97,7 +97,8 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
                 },
             )
             .map_err(with_flags)?;
-            let report = AdaptReport::new(opts, &res);
+            let default_degree = job.problem.degree_by_default.then_some(job.problem.degree);
+            let report = AdaptReport::new(opts, &res, default_degree);
             (res.outcome, Some(report))
         }
     };
@@ -227,7 +228,7 @@ fn run_comparison(job: StudyJob, w: &mut dyn Write) -> Result<()> {
                 let res = solve_adaptive(&s.problem, &s.cfg, &opts, s.backend.as_ref(), |_| {})
                     .map_err(with_flags)?;
                 settings.extend(adaptive_settings(r, &res.steps));
-                let report = AdaptReport::new(&opts, &res);
+                let report = AdaptReport::new(&opts, &res, None);
                 if !s.json {
                     write!(w, "{report}")?;
                 }

@@ -3,9 +3,11 @@
 //! rejected from its text alone is rejected here, with the flag's name.
 
 mod mesh;
+mod numbers;
 mod outputs;
 mod points;
 
+pub use numbers::{parse_alpha, parse_levels, ADAPTIVE_DEGREE};
 pub use outputs::{LookSpec, Output, OutputFile, OutputKind};
 pub use points::PointsSpec;
 
@@ -16,11 +18,12 @@ use crate::args::{
 use crate::error::{bad_input, BadInput};
 use crate::scene::SceneSpec;
 use anyhow::{Context, Result};
+use numbers::{degree, open_unit, parse_range};
 use outputs::{error_map, look, output, svg_file};
 use radcol_core::assembly::{QuadratureOptions, VisibilityMode, MIN_QUAD_TOL};
 use radcol_core::hmatrix::HOptions;
 use radcol_core::mesh::grading::Grade;
-use radcol_core::nodes::{check_alpha, check_degree};
+use radcol_core::nodes::check_degree;
 use radcol_core::problem::Field;
 use radcol_core::run::adapt::AdaptOptions;
 use radcol_core::run::{OperatorChoice, SolveConfig, SolverKind};
@@ -60,6 +63,8 @@ pub struct ProblemSpec {
     pub scene: SceneSpec,
     /// Degree r (0..=6).
     pub degree: usize,
+    /// True when `--degree` was not given.
+    pub degree_by_default: bool,
     /// α.
     pub alpha: AlphaSpec,
     /// ρ as given (default "0.5") and parsed.
@@ -181,7 +186,7 @@ fn solve_job(a: SolveArgs) -> Result<SolveJob> {
         outputs.push(output);
     }
     let max_edge = a.max_edge.map(mesh::check_max_edge).transpose()?;
-    let problem = problem(&a.problem)?;
+    let problem = problem(&a.problem, a.target_error.is_some())?;
     if let Some(p) = &a.error_map {
         if !problem.estimate {
             return Err(bad_input(
@@ -265,7 +270,7 @@ fn adapt(
 
 fn study_job(a: StudyArgs) -> Result<StudyJob> {
     let levels = parse_levels(&a.levels)?;
-    let problem = problem(&a.problem)?;
+    let problem = problem(&a.problem, false)?;
     if problem.exact.is_none() && !problem.estimate {
         return Err(bad_input(
             "a study without --exact EXPR estimates its errors: it cannot be used with --no-estimate",
@@ -341,11 +346,16 @@ fn info_job(a: InfoArgs) -> Result<InfoJob> {
     })
 }
 
-/// The shared options of `solve` and `study`.
-fn problem(p: &ProblemArgs) -> Result<ProblemSpec> {
+/// The shared options of `solve` and `study`; `adaptive`: `--target-error`
+/// was given, which makes the default degree [`ADAPTIVE_DEGREE`].
+fn problem(p: &ProblemArgs, adaptive: bool) -> Result<ProblemSpec> {
     let scene = SceneSpec::parse(&p.scene)?;
     mesh::scene_flags(p, &scene)?;
-    let degree = degree(p.degree)?;
+    let default_degree = match adaptive {
+        true => ADAPTIVE_DEGREE,
+        false => 1,
+    };
+    let degree = degree(p.degree.unwrap_or(default_degree))?;
     let alpha = parse_alpha(&p.alpha)?;
     let tol = open_unit("--tol", p.tol)?;
     let quad_tol = open_unit("--quad-tol", p.quad_tol)?;
@@ -374,6 +384,7 @@ fn problem(p: &ProblemArgs) -> Result<ProblemSpec> {
     Ok(ProblemSpec {
         scene,
         degree,
+        degree_by_default: p.degree.is_none(),
         alpha,
         rho: field("--rho", p.rho.as_deref().unwrap_or("0.5"))?,
         emission: p
@@ -425,68 +436,6 @@ fn problem(p: &ProblemArgs) -> Result<ProblemSpec> {
         ke_scale: mesh::ke_scale(p.ke),
         json: p.json,
     })
-}
-
-/// `--degree R` in 0..=6 (the range is core's).
-fn degree(r: usize) -> Result<usize, BadInput> {
-    check_degree(r).map_err(|e| bad_input(format!("--degree {r}: {e}")))
-}
-
-/// `auto` or a number in (0, 1/3).
-pub fn parse_alpha(text: &str) -> Result<AlphaSpec, BadInput> {
-    let text = text.trim();
-    if text.eq_ignore_ascii_case("auto") {
-        return Ok(AlphaSpec::Auto);
-    }
-    let value: f64 = text
-        .parse()
-        .map_err(|_| bad_input(format!("--alpha '{text}' is neither a number nor 'auto'")))?;
-    check_alpha(value).map_err(|e| bad_input(format!("--alpha {text}: {e}")))?;
-    Ok(AlphaSpec::Value(value))
-}
-
-fn open_unit(name: &str, v: f64) -> Result<f64, BadInput> {
-    if !(v > 0.0 && v < 1.0) {
-        return Err(bad_input(format!(
-            "{name} {v}: must lie strictly between 0 and 1"
-        )));
-    }
-    Ok(v)
-}
-
-/// `A..B` or `A..=B`, both inclusive, A <= B.
-pub fn parse_levels(text: &str) -> Result<RangeInclusive<u32>, BadInput> {
-    parse_range("--levels", text, "a level")
-}
-
-/// `A..B` or `A..=B` (inclusive) of whole numbers for `flag`; `what` names
-/// one of them in messages.
-fn parse_range(flag: &str, text: &str, what: &str) -> Result<RangeInclusive<u32>, BadInput> {
-    let t = text.trim();
-    let (a, b) = t
-        .split_once("..=")
-        .or_else(|| t.split_once(".."))
-        .ok_or_else(|| {
-            bad_input(format!(
-                "{flag} '{t}': expected A..B (inclusive), e.g. 0..3"
-            ))
-        })?;
-    let number = |s: &str| {
-        s.trim().parse::<u32>().map_err(|_| {
-            bad_input(format!(
-                "{flag} '{t}': '{}' is not {what} (a whole number >= 0); expected A..B, e.g. 0..3",
-                s.trim()
-            ))
-        })
-    };
-    let (a, b) = (number(a)?, number(b)?);
-    if a > b {
-        return Err(bad_input(format!(
-            "{flag} '{t}': the first {} {a} is greater than the last {b}",
-            what.trim_start_matches("a ")
-        )));
-    }
-    Ok(a..=b)
 }
 
 #[cfg(test)]
