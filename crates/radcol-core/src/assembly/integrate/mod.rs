@@ -259,6 +259,20 @@ impl<'a> ElementIntegrator<'a> {
         let m = out.len();
         let mut buf = [0.0f64; 64];
         let map = self.element_map(k);
+        if let ElementMap::Affine(v0, es, et, q0) = map {
+            let flat = FlatPiece {
+                v0,
+                es,
+                et,
+                normal: q0.normal,
+                scale: q0.jacobian * det * FRAC_1_PI,
+                a,
+                e1,
+                e2,
+            };
+            flat.apply(p, k, rule, phi, out);
+            return rule.len() as u64;
+        }
         for (&[x, y], &w) in rule.points.iter().zip(&rule.weights) {
             let st = [a[0] + x * e1[0] + y * e2[0], a[1] + x * e1[1] + y * e2[1]];
             let q = map.point(st);
@@ -317,6 +331,79 @@ impl<'a> ElementIntegrator<'a> {
             }
         };
         self.apply_rule(p, k, tri, self.ladder.rule(degree), phi, out)
+    }
+}
+
+/// A sub-triangle of a flat element, for [`ElementIntegrator::apply_rule`]:
+/// the element's affine map, its normal, the piece's corner `a` and edges
+/// `e1`, `e2` in σ, and Jacobian · |det| / π.
+struct FlatPiece {
+    v0: DVec3,
+    es: DVec3,
+    et: DVec3,
+    normal: DVec3,
+    scale: f64,
+    a: [f64; 2],
+    e1: [f64; 2],
+    e2: [f64; 2],
+}
+
+/// Rule points per batch of [`FlatPiece::apply`].
+const FLAT_BATCH: usize = 32;
+
+impl FlatPiece {
+    /// What the general loop of [`ElementIntegrator::apply_rule`] adds, the
+    /// kernel of a batch of rule points first and then φ where it is not
+    /// zero. On a flat element d · n_Q is the same for every Q (d = Q − P),
+    /// so a pair whose P lies behind the element's plane adds nothing; the
+    /// kernels of a batch are independent of each other and of φ, so their
+    /// divisions overlap instead of waiting for each φ (the partly visible
+    /// pairs of an occluding scene spend most of their time here).
+    fn apply(
+        &self,
+        p: &FieldPoint,
+        k: usize,
+        rule: &TriangleRule,
+        phi: &Integrand<'_>,
+        out: &mut [f64],
+    ) {
+        let d0 = self.v0 - p.position;
+        let b = (-d0.dot(self.normal)).max(0.0);
+        if b == 0.0 {
+            return;
+        }
+        let m = out.len();
+        let mut basis = [0.0f64; 64];
+        let (mut s, mut t, mut gw) = ([0.0; FLAT_BATCH], [0.0; FLAT_BATCH], [0.0; FLAT_BATCH]);
+        let n_p = p.normal;
+        for (xy, w) in rule
+            .points
+            .chunks(FLAT_BATCH)
+            .zip(rule.weights.chunks(FLAT_BATCH))
+        {
+            let len = xy.len();
+            for (i, (&[x, y], &wq)) in xy.iter().zip(w).enumerate() {
+                let (si, ti) = (
+                    self.a[0] + x * self.e1[0] + y * self.e2[0],
+                    self.a[1] + x * self.e1[1] + y * self.e2[1],
+                );
+                let d = d0 + self.es * si + self.et * ti;
+                let cos_p = d.dot(n_p).max(0.0);
+                let r2 = d.length_squared();
+                (s[i], t[i]) = (si, ti);
+                gw[i] = cos_p * b / (r2 * r2) * wq * self.scale;
+            }
+            for i in 0..len {
+                if gw[i] == 0.0 {
+                    continue;
+                }
+                let q = self.v0 + self.es * s[i] + self.et * t[i];
+                phi(k, [s[i], t[i]], q, &mut basis[..m]);
+                for (o, v) in out.iter_mut().zip(&basis[..m]) {
+                    *o += gw[i] * v;
+                }
+            }
+        }
     }
 }
 
