@@ -6,6 +6,7 @@
 use super::aca::{aca_plus, recompress, Cross, LowRank};
 use super::cluster::{self, ClusterTree};
 use super::{Entries, Structure};
+use std::cell::RefCell;
 
 /// One leaf of the block tree: ranges of the row and column orders.
 #[derive(Clone, Debug)]
@@ -117,21 +118,24 @@ pub(super) fn leaf(
     } else {
         let (zero_rows, zero_cols) = entries.zero_lines(rows, cols);
         let (lr, lc) = (live(&zero_rows), live(&zero_cols));
+        let (sub_rows, sub_cols) = (pick(rows, &lr), pick(cols, &lc));
+        let sampled = RefCell::new(Sampled::new(entries, &sub_rows, &sub_cols));
         let cross = admissible.then(|| {
-            let (sub_rows, sub_cols) = (pick(rows, &lr), pick(cols, &lc));
             aca_plus(
                 sub_rows.len(),
                 sub_cols.len(),
                 tol,
-                &mut |i, out| entries.block(&sub_rows[i..i + 1], &sub_cols, out),
-                &mut |j, out| entries.block(&sub_rows, &sub_cols[j..j + 1], out),
+                &mut |i, out| sampled.borrow_mut().row(i, out),
+                &mut |j, out| sampled.borrow_mut().column(j, out),
             )
         });
         match cross {
             Some(Cross::LowRank(l)) => {
                 LeafData::LowRank(recompress(&l, tol).padded(rows.len(), &lr, cols.len(), &lc))
             }
-            Some(Cross::Dense) | None => dense(rows, cols, &lr, &lc, entries),
+            Some(Cross::Dense) | None => {
+                dense(rows.len(), cols.len(), &lr, &lc, sampled.into_inner())
+            }
         }
     };
     Leaf {
@@ -140,6 +144,98 @@ pub(super) fn leaf(
         block: (r as u32, c as u32),
         admissible,
         data,
+    }
+}
+
+/// The live lines of one block (`rows` × `cols`, original indices) as a
+/// cross approximation asks for them, kept: a column is computed with its
+/// group ([`Entries::column_group`]: on the radiosity matrix the f_r basis
+/// functions of one element, whose integrals come together), so a later
+/// pivot in the group costs no kernel evaluation; and when the cross does
+/// not pay, the dense block is filled from the lines it already computed
+/// and only the rest is asked of `entries`.
+struct Sampled<'a> {
+    entries: &'a dyn Entries,
+    rows: &'a [usize],
+    cols: &'a [usize],
+    kept_rows: Vec<Option<Vec<f64>>>,
+    kept_cols: Vec<Option<Vec<f64>>>,
+}
+
+impl<'a> Sampled<'a> {
+    fn new(entries: &'a dyn Entries, rows: &'a [usize], cols: &'a [usize]) -> Self {
+        Self {
+            entries,
+            rows,
+            cols,
+            kept_rows: vec![None; rows.len()],
+            kept_cols: vec![None; cols.len()],
+        }
+    }
+
+    /// Local row `i` into `out`.
+    fn row(&mut self, i: usize, out: &mut [f64]) {
+        if let Some(r) = &self.kept_rows[i] {
+            out.copy_from_slice(r);
+            return;
+        }
+        self.entries.block(&self.rows[i..i + 1], self.cols, out);
+        self.kept_rows[i] = Some(out.to_vec());
+    }
+
+    /// Local column `j` into `out`.
+    fn column(&mut self, j: usize, out: &mut [f64]) {
+        if let Some(c) = &self.kept_cols[j] {
+            out.copy_from_slice(c);
+            return;
+        }
+        let group = self.entries.column_group(self.cols[j]);
+        let members: Vec<usize> = (0..self.cols.len())
+            .filter(|&b| group.contains(&self.cols[b]))
+            .collect();
+        let cols: Vec<usize> = members.iter().map(|&b| self.cols[b]).collect();
+        let (m, g) = (self.rows.len(), cols.len());
+        let mut buf = vec![0.0; m * g];
+        self.entries.block(self.rows, &cols, &mut buf);
+        for (at, &b) in members.iter().enumerate() {
+            self.kept_cols[b] = Some((0..m).map(|i| buf[i * g + at]).collect());
+        }
+        out.copy_from_slice(self.kept_cols[j].as_deref().expect("j is in its group"));
+    }
+
+    /// The whole block, row-major: the kept lines, and the entries of the
+    /// other rows in the other columns from `entries` (one call).
+    fn block(self) -> Vec<f64> {
+        let (m, n) = (self.rows.len(), self.cols.len());
+        let mut a = vec![0.0; m * n];
+        let rest_rows: Vec<usize> = (0..m).filter(|&i| self.kept_rows[i].is_none()).collect();
+        let rest_cols: Vec<usize> = (0..n).filter(|&j| self.kept_cols[j].is_none()).collect();
+        if !rest_rows.is_empty() && !rest_cols.is_empty() {
+            let mut rest = vec![0.0; rest_rows.len() * rest_cols.len()];
+            self.entries.block(
+                &pick(self.rows, &rest_rows),
+                &pick(self.cols, &rest_cols),
+                &mut rest,
+            );
+            for (row, &i) in rest.chunks_exact(rest_cols.len()).zip(&rest_rows) {
+                for (v, &j) in row.iter().zip(&rest_cols) {
+                    a[i * n + j] = *v;
+                }
+            }
+        }
+        for (j, c) in self.kept_cols.iter().enumerate() {
+            if let Some(c) = c {
+                for (i, v) in c.iter().enumerate() {
+                    a[i * n + j] = *v;
+                }
+            }
+        }
+        for (i, r) in self.kept_rows.iter().enumerate() {
+            if let Some(r) = r {
+                a[i * n..(i + 1) * n].copy_from_slice(r);
+            }
+        }
+        a
     }
 }
 
@@ -168,32 +264,130 @@ fn pick(idx: &[usize], positions: &[usize]) -> Vec<usize> {
     positions.iter().map(|&a| idx[a]).collect()
 }
 
-/// The dense leaf of `rows` × `cols`, of which only the rows at positions
-/// `lr` and the columns at `lc` can be non-zero: zero, compact or whole,
-/// whichever stores least ([`dense_numbers`]).
-fn dense(
-    rows: &[usize],
-    cols: &[usize],
-    lr: &[usize],
-    lc: &[usize],
-    entries: &dyn Entries,
-) -> LeafData {
-    let (m, n) = (rows.len(), cols.len());
+/// The dense leaf of an m × n block of which only the rows at positions
+/// `lr` and the columns at `lc` can be non-zero (`live`: those lines):
+/// zero, compact or whole, whichever stores least ([`dense_numbers`]).
+fn dense(m: usize, n: usize, lr: &[usize], lc: &[usize], live: Sampled<'_>) -> LeafData {
     let numbers = dense_numbers(m, n, lr.len(), lc.len());
     if numbers == 0 {
         LeafData::Zero
     } else if numbers < (m * n) as u64 {
-        let mut a = vec![0.0; lr.len() * lc.len()];
-        entries.block(&pick(rows, lr), &pick(cols, lc), &mut a);
         let index = |v: &[usize]| v.iter().map(|&a| a as u32).collect();
         LeafData::Compact(Compact {
             rows: index(lr),
             cols: index(lc),
-            a,
+            a: live.block(),
         })
     } else {
         let mut a = vec![0.0; m * n];
-        entries.block(rows, cols, &mut a);
+        for (row, &i) in live.block().chunks_exact(lc.len()).zip(lr) {
+            for (v, &j) in row.iter().zip(lc) {
+                a[i * n + j] = *v;
+            }
+        }
         LeafData::Dense(a)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::matrix::DenseMatrix;
+    use std::sync::atomic::{AtomicU64, Ordering};
+
+    /// A dense matrix whose columns come in groups of three (as an
+    /// element's basis functions do), counting the entries asked of it.
+    struct Grouped {
+        m: DenseMatrix,
+        asked: AtomicU64,
+    }
+
+    impl Structure for Grouped {}
+
+    impl Entries for Grouped {
+        fn block(&self, rows: &[usize], cols: &[usize], out: &mut [f64]) {
+            self.asked
+                .fetch_add((rows.len() * cols.len()) as u64, Ordering::Relaxed);
+            self.m.block(rows, cols, out);
+        }
+
+        fn column_group(&self, j: usize) -> std::ops::Range<usize> {
+            j / 3 * 3..(j / 3 + 1) * 3
+        }
+    }
+
+    /// A block whose cross does not pay (full rank) is filled from the
+    /// rows and columns the cross computed plus the rest: every entry the
+    /// matrix's, and fewer asked than the cross and a fresh fill together
+    /// (what the build asked before); a low-rank block's columns are asked
+    /// a group at a time and never twice.
+    #[test]
+    fn a_dense_leaf_reuses_what_its_cross_computed() {
+        let (m, n) = (30, 24);
+        let mut x = 0x9e37_79b9_u64;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x % 1000) as f64 / 1000.0 - 0.5
+        };
+        let data: Vec<f64> = (0..m * n).map(|_| next()).collect();
+        let entries = Grouped {
+            m: DenseMatrix::from_row_major(m, n, data.clone()),
+            asked: AtomicU64::new(0),
+        };
+        let (rows, cols): (Vec<usize>, Vec<usize>) = ((0..m).collect(), (0..n).collect());
+        let sampled = RefCell::new(Sampled::new(&entries, &rows, &cols));
+        let cross = aca_plus(
+            m,
+            n,
+            1e-8,
+            &mut |i, out| sampled.borrow_mut().row(i, out),
+            &mut |j, out| sampled.borrow_mut().column(j, out),
+        );
+        assert!(matches!(cross, Cross::Dense));
+        let by_cross = entries.asked.load(Ordering::Relaxed);
+        assert!(by_cross > (m * n) as u64 / 2, "{by_cross}");
+        let LeafData::Dense(a) = dense(m, n, &rows, &cols, sampled.into_inner()) else {
+            panic!("a full block is stored whole");
+        };
+        assert_eq!(a, data);
+        let asked = entries.asked.load(Ordering::Relaxed);
+        assert!(
+            asked < by_cross + (m * n) as u64 / 2,
+            "{asked} after {by_cross}"
+        );
+
+        // Rank 2, columns in groups of three: each group asked once.
+        let data: Vec<f64> = (0..m * n)
+            .map(|k| {
+                let (i, j) = ((k / n) as f64, (k % n) as f64);
+                1.0 + i * j + (0.1 * i).sin() * (0.2 * j).cos()
+            })
+            .collect();
+        let entries = Grouped {
+            m: DenseMatrix::from_row_major(m, n, data),
+            asked: AtomicU64::new(0),
+        };
+        let sampled = RefCell::new(Sampled::new(&entries, &rows, &cols));
+        let cross = aca_plus(
+            m,
+            n,
+            1e-10,
+            &mut |i, out| sampled.borrow_mut().row(i, out),
+            &mut |j, out| sampled.borrow_mut().column(j, out),
+        );
+        let Cross::LowRank(lr) = cross else {
+            panic!("rank 2 compresses");
+        };
+        let s = sampled.into_inner();
+        let (rows_kept, cols_kept) = (
+            s.kept_rows.iter().flatten().count(),
+            s.kept_cols.iter().flatten().count(),
+        );
+        assert_eq!(cols_kept % 3, 0, "whole groups");
+        let asked = entries.asked.load(Ordering::Relaxed) as usize;
+        assert_eq!(asked, rows_kept * n + cols_kept * m, "no line asked twice");
+        assert!(lr.rank() <= 4, "rank {}", lr.rank());
     }
 }

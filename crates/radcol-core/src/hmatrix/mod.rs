@@ -69,6 +69,14 @@ pub trait Structure: Sync {
 pub trait Entries: Structure {
     /// `out[a * cols.len() + b] = A[rows[a], cols[b]]` (original indices).
     fn block(&self, rows: &[usize], cols: &[usize], out: &mut [f64]);
+
+    /// The columns computed together with column `j` (original indices, `j`
+    /// among them): asking [`Entries::block`] for any of them costs as much
+    /// as asking for all. A cross approximation keeps the others for when
+    /// it asks for them.
+    fn column_group(&self, j: usize) -> std::ops::Range<usize> {
+        j..j + 1
+    }
 }
 
 /// How a hierarchical matrix is built.

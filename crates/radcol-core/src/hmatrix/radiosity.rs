@@ -81,6 +81,11 @@ impl<'a> PlanEntries<'a> {
 impl Entries for PlanEntries<'_> {
     /// Rows are grouped by element, and each element's rows filled at once
     /// over each run of consecutive column elements.
+    fn column_group(&self, j: usize) -> std::ops::Range<usize> {
+        let f = self.plan.discretization().nodes_per_element();
+        j / f * f..(j / f + 1) * f
+    }
+
     fn block(&self, rows: &[usize], cols: &[usize], out: &mut [f64]) {
         let f_rows = self.plan.rows().nodes_per_element();
         let f = self.plan.discretization().nodes_per_element();
