@@ -13,7 +13,7 @@ use std::ops::RangeInclusive;
 /// 10 minutes, where r = 1 ran out of memory and r = 3 was at 3.3e-4 after 7
 /// (r = 2 then at 3.0e-4);
 /// on the shadowed floor r = 2 took 2.2–3.8× fewer unknowns than r = 1 to
-/// 1e-3, in a third of the seconds.
+/// 1e-3 (square occluder: 4 824 against 10 854, 1.28 s against 2.98 s).
 /// Uniform refinement keeps r = 1.
 pub const ADAPTIVE_DEGREE: usize = 2;
 
