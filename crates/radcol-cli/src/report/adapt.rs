@@ -15,7 +15,8 @@ pub struct AdaptReport {
     max_unknowns: Option<u64>,
     /// The degree, when the target chose it (`--degree` not given).
     default_degree: Option<usize>,
-    /// The estimate reached (worst channel, relative max).
+    /// The estimate reached of what is shown (worst channel, relative
+    /// max; the figure the loop stops on, [`AdaptStep::estimate_shown`]).
     reached_estimate: f64,
     /// Why it stopped.
     stop: StopReason,
@@ -35,7 +36,7 @@ impl AdaptReport {
             target: opts.target,
             max_unknowns: opts.max_unknowns,
             default_degree,
-            reached_estimate: res.steps.last().map_or(f64::NAN, |s| s.estimate),
+            reached_estimate: res.steps.last().map_or(f64::NAN, |s| s.estimate_shown),
             stop: res.stop,
             steps: res.steps.clone(),
             singular_points: res.singular.clone(),
@@ -87,11 +88,16 @@ impl fmt::Display for AdaptLine<'_> {
         let s = self.0;
         write!(
             f,
-            "  step        {:7} elements {:8} unknowns  estimate max {} rms {}{}  {}{}",
+            "  step        {:7} elements {:8} unknowns  estimate max {} rms {}{}{}  {}{}",
             s.elements,
             s.unknowns,
             sci(s.estimate),
             sci(s.estimate_rms),
+            if s.estimate_shown > s.estimate {
+                format!(", shown max {}", sci(s.estimate_shown))
+            } else {
+                String::new()
+            },
             s.true_error
                 .map(|e| format!("  true {}", sci(e)))
                 .unwrap_or_default(),

@@ -74,6 +74,8 @@ pub struct ChannelReport {
     integral_e: f64,
     errors: Option<ErrorNorms>,
     estimate: Option<ErrorEstimate>,
+    /// [`ErrorEstimate::shown_max_rel`]: the limiter's change included.
+    estimate_shown: Option<f64>,
     /// Estimated over true global max error, when both are known.
     effectivity: Option<f64>,
     /// What the positivity limiter changed for display, when u_n < 0
@@ -206,6 +208,7 @@ impl SolveReport {
                     integral_e: c.integral_e,
                     errors: c.errors,
                     estimate: c.estimate.clone(),
+                    estimate_shown: c.estimate.as_ref().map(ErrorEstimate::shown_max_rel),
                     effectivity: match (&c.errors, &c.estimate) {
                         (Some(e), Some(est)) if e.global_max > 0.0 => Some(est.max / e.global_max),
                         _ => None,
@@ -312,9 +315,7 @@ impl SolveReport {
             if let Some(l) = &ch.limited {
                 let scale = ch.estimate.as_ref().map(|e| e.scale);
                 let shown = ch
-                    .estimate
-                    .as_ref()
-                    .map(|e| e.elements_rel().fold(0.0f64, f64::max))
+                    .estimate_shown
                     .map(|m| format!("; estimated error of what is shown: max {}", sci(m)))
                     .unwrap_or_default();
                 writeln!(

@@ -146,6 +146,17 @@ impl ErrorEstimate {
         let s = if self.scale > 0.0 { self.scale } else { 1.0 };
         self.elements.iter().map(move |e| e / s)
     }
+
+    /// The estimated max error of what is shown, relative to `scale`: the
+    /// largest element figure, and at least `max_rel`. It exceeds
+    /// `max_rel` where negative u_n is counted as error (the element
+    /// figures include −u_n there) and, once u_n is limited to
+    /// nonnegative values (`SolveConfig::limit_negative`), by the
+    /// limiter's change on the limited elements, which is added to their
+    /// figures.
+    pub fn shown_max_rel(&self) -> f64 {
+        self.elements_rel().fold(self.max_rel, f64::max)
+    }
 }
 
 /// What the estimate of one channel needs: u_n, and ρ and E at the check

@@ -183,6 +183,7 @@ mod tests {
             elements: 10,
             unknowns: 30,
             estimate,
+            estimate_shown: estimate,
             estimate_rms: estimate / 10.0,
             true_error,
             split: 1,

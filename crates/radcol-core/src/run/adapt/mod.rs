@@ -1,7 +1,8 @@
 //! Adaptive refinement to a tolerance: solve, estimate ([`crate::estimate`]),
 //! split the elements whose estimate is large 4:1, solve again, until the
-//! estimated max error relative to max |u_n| is below the target or a budget
-//! stops it.
+//! estimated max error of what is shown (u_n, or u_n limited to nonnegative
+//! values with the limiter's change added) relative to max |u_n| is below
+//! the target or a budget stops it.
 //!
 //! The collocation space is discontinuous, so an element is split without
 //! its neighbours (hanging vertices are harmless to the method); children
@@ -44,7 +45,8 @@ use std::time::Instant;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum StopReason {
-    /// The estimate is below the target.
+    /// The estimate of what is shown (the limited solution where u_n < 0
+    /// was limited) is below the target.
     Reached,
     /// The next step would exceed the unknowns budget.
     MaxUnknowns,
@@ -79,8 +81,14 @@ pub struct AdaptStep {
     pub elements: usize,
     /// Unknowns N.
     pub unknowns: usize,
-    /// Estimated max error relative to max |u_n| (worst channel).
+    /// Estimated max error of u_n relative to max |u_n| (worst channel).
     pub estimate: f64,
+    /// Estimated max error of what is shown (worst channel,
+    /// [`crate::estimate::ErrorEstimate::shown_max_rel`]): at least
+    /// `estimate`, more where u_n < 0 was limited or is counted as error.
+    /// The loop stops on this figure, so that the outputs, which show the
+    /// limited solution, meet the target.
+    pub estimate_shown: f64,
     /// Estimated rms error relative to max |u_n| (worst channel).
     pub estimate_rms: f64,
     /// True global max error, when the exact solution is known (first channel).
@@ -197,7 +205,8 @@ pub fn solve_adaptive(
             // One more stalled split freezes these.
             stalling: &|k| stalls[k] > 0 && stalls[k] + 1 >= opts.stall_generations,
         };
-        let (stop, marked, split) = decide(opts, &cfg, step.estimate, steps.len() + 1, &marking, f);
+        let shown = step.estimate_shown;
+        let (stop, marked, split) = decide(opts, &cfg, shown, steps.len() + 1, &marking, f);
         step.split = split;
         on_step(&step);
         steps.push(step);
@@ -309,12 +318,13 @@ fn describe(
     frozen: &dyn Fn(usize) -> bool,
     opts: &AdaptOptions,
 ) -> AdaptStep {
-    let (estimate, estimate_rms) = worst(out);
+    let (estimate, estimate_rms, estimate_shown) = worst(out);
     let threshold = opts.mark_fraction * opts.target;
     AdaptStep {
         elements: indicator.len(),
         unknowns: out.discretization.len(),
         estimate,
+        estimate_shown,
         estimate_rms,
         true_error: out.channels.first().and_then(|c| {
             let scale = c.estimate.as_ref().map_or(1.0, |x| x.scale);
@@ -355,13 +365,14 @@ fn indicators(out: &SolveOutcome) -> (Vec<f64>, Vec<bool>) {
     (ind, negative)
 }
 
-/// The worst channel's relative max and rms estimates.
-fn worst(out: &SolveOutcome) -> (f64, f64) {
+/// The worst channel's relative max and rms estimates of u_n, and its
+/// relative max estimate of what is shown.
+fn worst(out: &SolveOutcome) -> (f64, f64, f64) {
     out.channels
         .iter()
         .filter_map(|c| c.estimate.as_ref())
-        .fold((0.0f64, 0.0f64), |(m, r), e| {
-            (m.max(e.max_rel), r.max(e.rms_rel))
+        .fold((0.0f64, 0.0f64, 0.0f64), |(m, r, s), e| {
+            (m.max(e.max_rel), r.max(e.rms_rel), s.max(e.shown_max_rel()))
         })
 }
 
