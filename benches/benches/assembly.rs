@@ -40,7 +40,7 @@ fn far_field(c: &mut Criterion) {
             plan(ellipsoid(1.0, 0.8, 0.6), r, level)
         };
         let n = p.dim();
-        let f = p.discretization().nodes_per_element();
+        let f = p.discretization().max_nodes_per_element();
         let mut m = DenseMatrix::zeros(n, n);
         group.throughput(Throughput::Elements(p.stats().far_kernel_evals));
         group.bench_function(BenchmarkId::new(format!("{name}_r{r}"), n), |b| {

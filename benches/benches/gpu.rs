@@ -81,7 +81,7 @@ fn far_evals(c: &mut Criterion) {
     let gpus = gpu_backends();
     for (name, p) in cases() {
         let n = p.dim();
-        let f = p.discretization().nodes_per_element();
+        let f = p.discretization().max_nodes_per_element();
         let mut group = c.benchmark_group(format!("far_evals_{name}"));
         group.sample_size(10);
         group.throughput(Throughput::Elements(p.stats().far_kernel_evals));

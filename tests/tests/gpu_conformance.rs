@@ -143,7 +143,7 @@ fn gpu_tiling_does_not_change_the_matrix() {
         .unwrap();
         assert!(report.tiles > 10, "{name}: only {} tiles", report.tiles);
         let mut cpu_far = DenseMatrix::zeros(p.dim(), p.dim());
-        let f = p.discretization().nodes_per_element();
+        let f = p.discretization().max_nodes_per_element();
         for (kp, block) in cpu_far
             .as_mut_slice()
             .chunks_exact_mut(f * p.dim())

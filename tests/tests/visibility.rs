@@ -397,7 +397,7 @@ fn pairs_that_face_each_other_are_culled_only_when_every_ray_is_blocked() {
         &analyze(&scene.surface),
     );
     let occ = plan.occluders().expect("the cube occludes");
-    let (n, f) = (disc.mesh().len(), disc.nodes_per_element());
+    let (n, f) = (disc.mesh().len(), disc.max_nodes_per_element());
     let grid: Vec<(f64, f64)> = (0..=4)
         .flat_map(|i| (0..=4 - i).map(move |j| (i as f64 / 4.0, j as f64 / 4.0)))
         .map(|(s, t)| (0.05 + 0.9 * s, 0.05 + 0.9 * t))

@@ -12,6 +12,12 @@ pub enum InputError {
         /// The degree asked for.
         degree: usize,
     },
+    /// A degree per element that does not fit the mesh or the node sets.
+    #[error("degree per element: {message}")]
+    DegreePerElement {
+        /// What does not fit.
+        message: String,
+    },
     /// Node parameter out of range.
     #[error("alpha = {alpha} must lie in [1e-9, 1/3): below 1/3 so that all nodes are interior, and at least 1e-9 because nodes within rounding of an element's corners coincide with its neighbours' and make the curved maps singular (the sphere failed at 1e-14)")]
     Alpha {

@@ -133,6 +133,19 @@ pub fn dots<const K: usize>(a: &[f64], bs: [&[f64]; K]) -> [f64; K] {
     out
 }
 
+/// `data` (row-major, `ncols` columns) cut into the row blocks
+/// `offsets[k]..offsets[k + 1]`, one per element.
+pub fn row_blocks<'a>(data: &'a mut [f64], offsets: &[usize], ncols: usize) -> Vec<&'a mut [f64]> {
+    let mut blocks = Vec::with_capacity(offsets.len().saturating_sub(1));
+    let mut rest = data;
+    for w in offsets.windows(2) {
+        let (block, tail) = std::mem::take(&mut rest).split_at_mut((w[1] - w[0]) * ncols);
+        blocks.push(block);
+        rest = tail;
+    }
+    blocks
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

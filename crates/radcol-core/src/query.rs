@@ -147,12 +147,10 @@ impl PointEvaluator {
     /// and the kernel evaluations spent.
     pub fn row(&self, at: &Located) -> (Vec<f64>, u64) {
         let mesh = self.disc.mesh();
-        let f = self.disc.nodes_per_element();
-        let nodes = self.disc.nodes();
-        let r = nodes.degree();
+        let disc = &*self.disc;
         let integrator = ElementIntegrator::new(mesh, &self.ladder, self.opts.clone());
-        let phi = |_k: usize, st: [f64; 2], _q: DVec3, out: &mut [f64]| {
-            nodes.eval_basis(st[0], st[1], out)
+        let phi = |k: usize, st: [f64; 2], _q: DVec3, out: &mut [f64]| {
+            disc.nodes_of(k).eval_basis(st[0], st[1], out)
         };
         let fp = FieldPoint {
             position: at.position,
@@ -162,7 +160,8 @@ impl PointEvaluator {
         let mut row = vec![0.0; self.disc.len()];
         let mut evals = 0;
         let mut cands = Vec::new();
-        for (k, out) in row.chunks_exact_mut(f).enumerate() {
+        for k in 0..mesh.len() {
+            let (r, out) = (disc.degree(k), &mut row[disc.range(k)]);
             if !mesh.is_flat(k) {
                 evals += integrator.integrate(&fp, k, r, &phi, out);
                 continue;

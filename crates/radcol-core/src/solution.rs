@@ -65,12 +65,13 @@ impl Solution {
 
     /// u_n at (s, t) of element `k`.
     pub fn eval(&self, k: usize, s: f64, t: f64) -> f64 {
-        let f = self.disc.nodes_per_element();
+        let nodes = self.disc.nodes_of(k);
+        let f = nodes.len();
         let mut l = [0.0; (MAX_DEGREE + 1) * (MAX_DEGREE + 2) / 2];
-        self.disc.nodes().eval_basis(s, t, &mut l[..f]);
+        nodes.eval_basis(s, t, &mut l[..f]);
         l[..f]
             .iter()
-            .zip(&self.values[k * f..(k + 1) * f])
+            .zip(&self.values[self.disc.range(k)])
             .map(|(a, b)| a * b)
             .sum()
     }
@@ -89,16 +90,16 @@ impl Solution {
     pub fn limited_nonnegative(&self) -> Option<(Solution, Limited)> {
         let disc = &self.disc;
         let mesh = disc.mesh();
-        let f = disc.nodes_per_element();
-        let r = disc.nodes().degree();
         let m = LIMITER_LATTICE;
         let lattice: Vec<[f64; 2]> = (0..=m)
             .flat_map(|a| (0..=m - a).map(move |b| [a as f64 / m as f64, b as f64 / m as f64]))
             .collect();
         let ladder = RuleLadder::new();
         let l = [0.0; (MAX_DEGREE + 1) * (MAX_DEGREE + 2) / 2];
-        let eval = |c: &[f64], st: &[f64; 2], l: &mut [f64]| -> f64 {
-            disc.nodes().eval_basis(st[0], st[1], &mut l[..f]);
+        let eval = |k: usize, c: &[f64], st: &[f64; 2], l: &mut [f64]| -> f64 {
+            let nodes = disc.nodes_of(k);
+            let f = nodes.len();
+            nodes.eval_basis(st[0], st[1], &mut l[..f]);
             l[..f].iter().zip(c).map(|(a, b)| a * b).sum()
         };
         // Per element that must be limited: its new coefficients, ū and the change.
@@ -107,16 +108,17 @@ impl Solution {
             .map_init(
                 || l,
                 |l, k| {
-                    let c = &self.values[k * f..(k + 1) * f];
+                    let c = &self.values[disc.range(k)];
                     let (lo, hi) = lattice
                         .iter()
-                        .map(|st| eval(c, st, l))
+                        .map(|st| eval(k, c, st, l))
                         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), u| {
                             (a.min(u), b.max(u))
                         });
                     if lo >= 0.0 {
                         return None;
                     }
+                    let r = disc.degree(k);
                     let rule = ladder.rule(if mesh.is_flat(k) { r } else { r + 6 });
                     let (mut num, mut den) = (0.0, 0.0);
                     for (&[s, t], &w) in rule.points.iter().zip(&rule.weights) {
@@ -135,7 +137,7 @@ impl Solution {
                         c.iter().map(|&v| mean + theta * (v - mean)).collect()
                     };
                     let cand = scaled(theta);
-                    let (new, theta) = if lattice.iter().all(|st| eval(&cand, st, l) >= 0.0) {
+                    let (new, theta) = if lattice.iter().all(|st| eval(k, &cand, st, l) >= 0.0) {
                         (cand, theta)
                     } else {
                         (scaled(0.0), 0.0)
@@ -157,7 +159,7 @@ impl Solution {
             let Some((new, mean, change)) = lim else {
                 continue;
             };
-            values[k * f..(k + 1) * f].copy_from_slice(&new);
+            values[disc.range(k)].copy_from_slice(&new);
             report.elements += 1;
             report.zeroed += usize::from(mean == 0.0);
             report.change[k] = change;
@@ -193,20 +195,12 @@ impl Solution {
         rho: f64,
         emission: f64,
     ) -> f64 {
-        let f = self.disc.nodes_per_element();
-        let nodes = self.disc.nodes();
         let phi = |k: usize, st: [f64; 2], _q: DVec3, out: &mut [f64]| {
-            let mut l = [0.0; (MAX_DEGREE + 1) * (MAX_DEGREE + 2) / 2];
-            nodes.eval_basis(st[0], st[1], &mut l[..f]);
-            out[0] = l[..f]
-                .iter()
-                .zip(&self.values[k * f..(k + 1) * f])
-                .map(|(a, b)| a * b)
-                .sum();
+            out[0] = self.eval(k, st[0], st[1]);
         };
         let mut acc = [0.0];
         for k in 0..self.disc.mesh().len() {
-            integrator.integrate(p, k, nodes.degree(), &phi, &mut acc);
+            integrator.integrate(p, k, self.disc.degree(k), &phi, &mut acc);
         }
         emission + rho * acc[0]
     }
@@ -215,18 +209,18 @@ impl Solution {
 /// ∫_S of the interpolant with nodal values `values` (length N).
 pub fn integrate_nodal(disc: &Discretization, values: &[f64]) -> f64 {
     let mesh = disc.mesh();
-    let f = disc.nodes_per_element();
-    let r = disc.nodes().degree();
     let ladder = RuleLadder::new();
-    let mut l = vec![0.0; f];
+    let mut l = vec![0.0; disc.max_nodes_per_element()];
     let mut total = 0.0;
     for k in 0..mesh.len() {
+        let (nodes, r) = (disc.nodes_of(k), disc.degree(k));
+        let l = &mut l[..nodes.len()];
         let rule = ladder.rule(if mesh.is_flat(k) { r } else { r + 6 });
         for (&[s, t], &w) in rule.points.iter().zip(&rule.weights) {
-            disc.nodes().eval_basis(s, t, &mut l);
+            nodes.eval_basis(s, t, l);
             let u: f64 = l
                 .iter()
-                .zip(&values[k * f..(k + 1) * f])
+                .zip(&values[disc.range(k)])
                 .map(|(a, b)| a * b)
                 .sum();
             total += w * mesh.point(k, s, t).jacobian * u;
@@ -259,7 +253,7 @@ mod tests {
         for (surface, r) in [(box_room(1.0, 2.0, 1.5), 1), (sphere(1.0), 3)] {
             let mesh = Arc::new(Mesh::new(Arc::new(surface), 1));
             let disc = Arc::new(Discretization::new(mesh, NodeSet::new(r, 0.1).unwrap()));
-            let f = disc.nodes_per_element();
+            let f = disc.nodes_per(0);
             let positive = Solution::new(disc.clone(), vec![1.0; disc.len()]);
             assert!(positive.limited_nonnegative().is_none());
             let mut values = vec![1.0; disc.len()];

@@ -31,7 +31,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let visibility = radcol_core::visibility::analyze(disc.mesh().surface());
     let plan = AssemblyPlan::new(disc, QuadratureOptions::default(), &visibility);
     let n = plan.dim();
-    let f = plan.discretization().nodes_per_element();
+    let f = plan.discretization().max_nodes_per_element();
     let evals = plan.stats().far_kernel_evals as f64;
     println!("N = {n}, far kernel evaluations = {evals:.3e}");
 

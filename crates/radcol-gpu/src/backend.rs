@@ -67,6 +67,12 @@ impl GpuBackend {
 
     fn assemble_gpu(&self, plan: &AssemblyPlan) -> Result<Assembled, GpuError> {
         let start = Instant::now();
+        let Some(nodes) = plan.discretization().uniform_nodes() else {
+            return Err(GpuError::Unsupported(
+                "a degree per element: the far-field shader takes one node set per assembly; use the CPU backend".into(),
+            ));
+        };
+        let f = nodes.len();
         let n_dim = plan.dim();
         let mut matrix = DenseMatrix::zeros(n_dim, n_dim);
         if n_dim == 0 {
@@ -94,7 +100,6 @@ impl GpuBackend {
             )
         });
         let far = far?;
-        let f = plan.discretization().nodes_per_element();
         let data = matrix.as_mut_slice();
         for block in &special.blocks {
             for (k, vals) in &block.pairs {
@@ -142,7 +147,8 @@ struct Special {
 /// `fill_block(.., FillMode::SpecialOnly)` so the rules are the CPU backend's.
 fn special_pairs(plan: &AssemblyPlan) -> Special {
     let n = plan.discretization().mesh().len();
-    let f = plan.discretization().nodes_per_element();
+    // One node set (checked by the caller).
+    let f = plan.discretization().max_nodes_per_element();
     let n_dim = plan.dim();
     let classes = plan.classes();
     let kps: Vec<usize> = (0..n)

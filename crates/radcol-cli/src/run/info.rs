@@ -198,7 +198,7 @@ fn estimate_assembly(
     let plan = AssemblyPlan::new(disc.clone(), QuadratureOptions::default(), visibility);
     let plan_s = t.elapsed().as_secs_f64();
     let n = disc.mesh().len();
-    let f = disc.nodes_per_element();
+    let f = disc.max_nodes_per_element();
     let samples = n.min(INFO_SAMPLE_BLOCKS);
     let mut block = vec![0.0; f * disc.len()];
     let t = Instant::now();

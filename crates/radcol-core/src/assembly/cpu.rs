@@ -45,11 +45,11 @@ fn fill(plan: &AssemblyPlan, previous: Option<&DenseMatrix>) -> Assembled {
         std::sync::Arc::ptr_eq(plan.rows(), plan.discretization()),
         "backends assemble square plans (AssemblyPlan::at_points plans are filled block by block)"
     );
-    let f = plan.discretization().nodes_per_element();
+    let disc = plan.discretization();
     let mut matrix = DenseMatrix::zeros(n_dim, n_dim);
-    let mode = match (previous, plan.unchanged()) {
-        (Some(prev), Some(u)) => {
-            u.copy_blocks(prev, &mut matrix, f);
+    let mode = match (previous, plan.unchanged(), plan.previous_offsets()) {
+        (Some(prev), Some(u), Some(old)) => {
+            u.copy_blocks(prev, &mut matrix, old, disc.offsets());
             FillMode::NotReused
         }
         _ => FillMode::All,
@@ -57,9 +57,8 @@ fn fill(plan: &AssemblyPlan, previous: Option<&DenseMatrix>) -> Assembled {
     let kernel_evals = if n_dim == 0 {
         0
     } else {
-        matrix
-            .as_mut_slice()
-            .par_chunks_exact_mut(f * n_dim)
+        crate::matrix::row_blocks(matrix.as_mut_slice(), disc.offsets(), n_dim)
+            .into_par_iter()
             .enumerate()
             .map(|(kp, block)| plan.fill_block(kp, block, mode))
             .sum()

@@ -91,6 +91,25 @@ pub fn check_nodes(r: usize, alpha: f64) -> NodeSet {
     sets.iter().find(apart).unwrap_or(last).clone()
 }
 
+/// The check points of every element of `disc`: [`check_nodes`] of the
+/// element's node set (degree r + 1, at most [`MAX_DEGREE`]; where two of
+/// `disc`'s sets give check sets of one degree, the first one's serves
+/// both).
+pub fn check_discretization(disc: &Discretization) -> Discretization {
+    let mut sets: Vec<NodeSet> = Vec::new();
+    for s in disc.node_sets() {
+        let c = check_nodes(s.degree(), s.alpha());
+        if !sets.iter().any(|o| o.degree() == c.degree()) {
+            sets.push(c);
+        }
+    }
+    let degrees: Vec<usize> = (0..disc.mesh().len())
+        .map(|k| (disc.degree(k) + 1).min(MAX_DEGREE))
+        .collect();
+    Discretization::with_degrees(disc.mesh().clone(), sets, &degrees)
+        .expect("a check set of every degree used")
+}
+
 /// The estimate of one channel's solution.
 #[derive(Clone, Debug, Serialize)]
 pub struct ErrorEstimate {
@@ -178,30 +197,32 @@ pub struct ChannelFields<'a> {
 /// [`check_nodes`] on the solutions' mesh), filled and contracted one row
 /// block at a time (memory O(f·N)).
 pub fn estimate(check: &AssemblyPlan, channels: &[ChannelFields<'_>]) -> Vec<ErrorEstimate> {
-    let fc = check.rows().nodes_per_element();
+    let rows = check.rows();
     let ncols = check.dim();
-    let n = check.rows().mesh().len();
+    let n = rows.mesh().len();
     let blocks = (0..n)
         .into_par_iter()
-        .map_init(
-            || vec![0.0; fc * ncols],
-            |block, kp| {
-                check.fill_block(kp, block, FillMode::All);
-                contract(block, fc, ncols, channels)
-            },
-        )
+        .map_init(Vec::new, |block, kp| {
+            let fc = rows.nodes_per(kp);
+            block.resize(fc * ncols, 0.0);
+            check.fill_block(kp, &mut block[..fc * ncols], FillMode::All);
+            contract(&block[..fc * ncols], fc, ncols, channels)
+        })
         .collect();
-    summaries(check, channels, by_channel(blocks, channels.len(), fc))
+    summaries(check, channels, by_channel(blocks, channels.len()))
 }
 
 /// Per channel, the values of every element's `blocks` (channel-major
-/// within each block, `fc` per channel), in check-row order.
-fn by_channel(blocks: Vec<Vec<f64>>, channels: usize, fc: usize) -> Vec<Vec<f64>> {
+/// within each block, the same number per channel), in check-row order.
+fn by_channel(blocks: Vec<Vec<f64>>, channels: usize) -> Vec<Vec<f64>> {
     (0..channels)
         .map(|c| {
             blocks
                 .iter()
-                .flat_map(|b| b[c * fc..(c + 1) * fc].iter().copied())
+                .flat_map(|b| {
+                    let fc = b.len() / channels;
+                    b[c * fc..(c + 1) * fc].iter().copied()
+                })
                 .collect()
         })
         .collect()
@@ -215,7 +236,6 @@ fn summaries(
     ku: Vec<Vec<f64>>,
 ) -> Vec<ErrorEstimate> {
     let disc = check.rows();
-    let fc = disc.nodes_per_element();
     channels
         .iter()
         .zip(ku)
@@ -226,7 +246,7 @@ fn summaries(
                 .map(|p| ch.solution.eval(p.element, p.st[0], p.st[1]))
                 .collect();
             let eta = |k: usize, a: usize| {
-                let i = k * fc + a;
+                let i = disc.offset(k) + a;
                 ch.emission[i] + ch.rho[i] * ku[i] - coeffs[i]
             };
             let mut e = summarise(disc, ch, &coeffs, eta);
@@ -264,8 +284,6 @@ fn summarise(
     eta: impl Fn(usize, usize) -> f64,
 ) -> ErrorEstimate {
     let mesh = disc.mesh();
-    let check = disc.nodes();
-    let fc = check.len();
     let nodal = ch.solution.nodal();
     let nonneg = ch
         .emission
@@ -277,10 +295,11 @@ fn summarise(
         .map(|[a, b]| [a as f64 / LATTICE as f64, b as f64 / LATTICE as f64])
         .collect();
     let ladder = RuleLadder::new();
-    let rule = ladder.rule(2 * check.degree());
-    let mut l = vec![0.0; fc];
+    let mut l = vec![0.0; disc.max_nodes_per_element()];
     let mut interp = |k: usize, st: [f64; 2]| {
-        check.eval_basis(st[0], st[1], &mut l);
+        let check = disc.nodes_of(k);
+        let fc = check.len();
+        check.eval_basis(st[0], st[1], &mut l[..fc]);
         let e: f64 = (0..fc).map(|a| l[a] * eta(k, a)).sum();
         (e, ch.solution.eval(k, st[0], st[1]))
     };
@@ -307,6 +326,7 @@ fn summarise(
                 most_negative = most_negative.max(-u);
             }
         }
+        let rule = ladder.rule(2 * disc.degree(k));
         for (&st, &w) in rule.points.iter().zip(&rule.weights) {
             let (e, _) = interp(k, st);
             l2sq += w * mesh.point(k, st[0], st[1]).jacobian * (e / unit) * (e / unit);

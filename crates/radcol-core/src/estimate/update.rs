@@ -31,6 +31,8 @@
 
 use super::{by_channel, contract, summaries, ChannelFields, ErrorEstimate};
 use crate::assembly::AssemblyPlan;
+use crate::discretization::Discretization;
+use crate::nodes::NodeSet;
 use rayon::prelude::*;
 
 /// Above this share of a fresh estimate's pairs (the rows of new elements
@@ -60,10 +62,9 @@ pub fn estimate_updated(
     }
     let disc = check.discretization();
     let n = disc.mesh().len();
-    let f = disc.nodes_per_element();
-    let fc = check.rows().nodes_per_element();
-    let lebesgue = disc.nodes().lebesgue_constant();
-    let lebesgue_check = check.rows().nodes().lebesgue_constant();
+    let lebesgue = max_lebesgue(disc);
+    let lebesgue_check = max_lebesgue(check.rows());
+    let old_rows = check.previous_row_offsets()?;
     // Per channel: the drift allowed in K u_n, and what this update may add.
     let mut budgets = Vec::with_capacity(channels.len());
     for ((ch, prev), delta) in channels.iter().zip(previous).zip(change) {
@@ -73,7 +74,7 @@ pub fn estimate_updated(
             .iter()
             .fold(0.0f64, |m, u| m.max(u.abs()));
         let rho = ch.rho.iter().fold(0.0f64, |m, r| m.max(r.abs()));
-        if prev.check_ku.len() != unchanged.old_len() * fc || delta.len() != n * f {
+        if prev.check_ku.len() != old_rows[unchanged.old_len()] || delta.len() != disc.len() {
             return None;
         }
         // |η - η_computed| ≤ Λ_c ρ drift at every point of an element.
@@ -101,7 +102,7 @@ pub fn estimate_updated(
         let sups: Vec<f64> = change
             .iter()
             .map(|delta| {
-                let nodal = delta[k * f..(k + 1) * f].iter();
+                let nodal = delta[disc.range(k)].iter();
                 lebesgue * nodal.fold(0.0f64, |m, d| m.max(d.abs()))
             })
             .collect();
@@ -146,16 +147,18 @@ fn updated_ku(
     wanted: &[bool],
 ) -> Vec<Vec<f64>> {
     let unchanged = check.unchanged().expect("checked by the caller");
+    let old_rows = check.previous_row_offsets().expect("with unchanged");
     let n = wanted.len();
-    let f = check.discretization().nodes_per_element();
-    let fc = check.rows().nodes_per_element();
+    let disc = check.discretization();
     let ncols = check.dim();
     let columns: Vec<usize> = (0..n).filter(|&k| wanted[k]).collect();
     let blocks = (0..n)
         .into_par_iter()
-        .map_init(
-            || vec![0.0; fc * ncols],
-            |block, kp| match unchanged.old(kp) {
+        .map_init(Vec::new, |block, kp| {
+            let fc = check.rows().nodes_per(kp);
+            block.resize(fc * ncols, 0.0);
+            let block = &mut block[..fc * ncols];
+            match unchanged.old(kp) {
                 None => {
                     check.fill_block(kp, block, crate::assembly::FillMode::All);
                     contract(block, fc, ncols, channels)
@@ -168,16 +171,24 @@ fn updated_ku(
                             let row = &block[a * ncols..(a + 1) * ncols];
                             let kd: f64 = columns
                                 .iter()
-                                .flat_map(|&k| k * f..(k + 1) * f)
+                                .flat_map(|&k| disc.range(k))
                                 .map(|j| row[j] * delta[j])
                                 .sum();
-                            out.push(prev.check_ku[op * fc + a] + kd);
+                            out.push(prev.check_ku[old_rows[op] + a] + kd);
                         }
                     }
                     out
                 }
-            },
-        )
+            }
+        })
         .collect();
-    by_channel(blocks, channels.len(), fc)
+    by_channel(blocks, channels.len())
+}
+
+/// The largest Lebesgue constant of `disc`'s node sets.
+fn max_lebesgue(disc: &Discretization) -> f64 {
+    disc.node_sets()
+        .iter()
+        .map(NodeSet::lebesgue_constant)
+        .fold(0.0, f64::max)
 }

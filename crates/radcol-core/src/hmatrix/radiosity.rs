@@ -71,8 +71,9 @@ impl<'a> PlanEntries<'a> {
         check: impl FnOnce(&SampledSize) -> Result<(), E>,
     ) -> Result<(HMatrix, SampledSize), E> {
         let (rows, cols) = self.boxes();
-        let f = self.plan.discretization().nodes_per_element();
-        with_elements(previous, f, |reuse| {
+        let new = self.plan.discretization().offsets();
+        let offsets = self.plan.previous_offsets().map(|old| (old, new));
+        with_elements(previous, offsets, |reuse| {
             HMatrix::build_checked(&rows, &cols, self, opts, reuse, check)
         })
     }
@@ -82,27 +83,42 @@ impl Entries for PlanEntries<'_> {
     /// Rows are grouped by element, and each element's rows filled at once
     /// over each run of consecutive column elements.
     fn column_group(&self, j: usize) -> std::ops::Range<usize> {
-        let f = self.plan.discretization().nodes_per_element();
-        j / f * f..(j / f + 1) * f
+        let disc = self.plan.discretization();
+        disc.range(disc.element_of(j))
     }
 
     fn block(&self, rows: &[usize], cols: &[usize], out: &mut [f64]) {
-        let f_rows = self.plan.rows().nodes_per_element();
-        let f = self.plan.discretization().nodes_per_element();
-        let mut elems: Vec<usize> = cols.iter().map(|&j| j / f).collect();
+        let (disc, row_disc) = (self.plan.discretization(), self.plan.rows());
+        let mut elems: Vec<usize> = cols.iter().map(|&j| disc.element_of(j)).collect();
         elems.sort_unstable();
         elems.dedup();
         let runs = consecutive_runs(&elems);
-        let width = elems.len() * f;
+        // Where each listed element's columns begin in a row of the
+        // element-ordered buffer, and the row's width.
+        let starts: Vec<usize> = elems
+            .iter()
+            .scan(0, |w, &e| {
+                let at = *w;
+                *w += disc.nodes_per(e);
+                Some(at)
+            })
+            .collect();
+        let width = elems.iter().map(|&e| disc.nodes_per(e)).sum::<usize>();
         // Where column b lands in a row of the element-ordered buffer.
         let at: Vec<usize> = cols
             .iter()
-            .map(|&j| elems.binary_search(&(j / f)).expect("listed") * f + j % f)
+            .map(|&j| {
+                let p = &disc.points()[j];
+                starts[elems.binary_search(&p.element).expect("listed")] + p.node
+            })
             .collect();
         let mut by_elem: Vec<(usize, usize, usize)> = rows
             .iter()
             .enumerate()
-            .map(|(a, &i)| (i / f_rows, i % f_rows, a))
+            .map(|(a, &i)| {
+                let p = &row_disc.points()[i];
+                (p.element, p.node, a)
+            })
             .collect();
         by_elem.sort_unstable();
         let (mut buf, mut part) = (Vec::new(), Vec::new());
@@ -114,7 +130,7 @@ impl Entries for PlanEntries<'_> {
             buf.resize((hi - lo) * width, 0.0);
             let mut offset = 0;
             for run in &runs {
-                let w = run.len() * f;
+                let w = disc.range_of(run.clone()).len();
                 part.clear();
                 part.resize((hi - lo) * w, 0.0);
                 evals += self.plan.fill_part(kp, lo..hi, run.clone(), &mut part);
@@ -163,16 +179,15 @@ impl Structure for PlanEntries<'_> {
     /// elements, whose pairs with every element of the other side are
     /// culled ([`Self::culled`]).
     fn zero_lines(&self, rows: &[usize], cols: &[usize]) -> (Vec<bool>, Vec<bool>) {
-        let f_rows = self.plan.rows().nodes_per_element();
-        let f = self.plan.discretization().nodes_per_element();
+        let (disc, row_disc) = (self.plan.discretization(), self.plan.rows());
         let c = self.culled(rows, cols);
         let zero_cols = c.zero_cols();
         (
             rows.iter()
-                .map(|&i| c.zero_rows.binary_search(&(i / f_rows)).is_ok())
+                .map(|&i| c.zero_rows.binary_search(&row_disc.element_of(i)).is_ok())
                 .collect(),
             cols.iter()
-                .map(|&j| zero_cols.binary_search(&(j / f)).is_ok())
+                .map(|&j| zero_cols.binary_search(&disc.element_of(j)).is_ok())
                 .collect(),
         )
     }
@@ -206,12 +221,11 @@ impl Culled {
 impl PlanEntries<'_> {
     /// The block's distinct row and column elements, sorted.
     fn elements(&self, rows: &[usize], cols: &[usize]) -> (Vec<usize>, Vec<usize>) {
-        let f_rows = self.plan.rows().nodes_per_element();
-        let f = self.plan.discretization().nodes_per_element();
-        let mut row_elems: Vec<usize> = rows.iter().map(|&i| i / f_rows).collect();
+        let (disc, row_disc) = (self.plan.discretization(), self.plan.rows());
+        let mut row_elems: Vec<usize> = rows.iter().map(|&i| row_disc.element_of(i)).collect();
         row_elems.sort_unstable();
         row_elems.dedup();
-        let mut col_elems: Vec<usize> = cols.iter().map(|&j| j / f).collect();
+        let mut col_elems: Vec<usize> = cols.iter().map(|&j| disc.element_of(j)).collect();
         col_elems.sort_unstable();
         col_elems.dedup();
         (row_elems, col_elems)
@@ -312,7 +326,6 @@ fn boxes(disc: &Discretization) -> (Vec<Aabb>, Vec<Aabb>) {
         })
         .collect();
     let mesh = disc.mesh();
-    let f = disc.nodes_per_element();
     let cols = (0..mesh.len())
         .flat_map(|k| {
             // A flat element's own corners: the cube of its bounding ball
@@ -333,7 +346,7 @@ fn boxes(disc: &Discretization) -> (Vec<Aabb>, Vec<Aabb>) {
                     hi: c + DVec3::splat(r),
                 }
             };
-            std::iter::repeat_n(b, f)
+            std::iter::repeat_n(b, disc.nodes_per(k))
         })
         .collect();
     (rows, cols)
@@ -349,11 +362,10 @@ fn one_side(p: DVec3, n: DVec3, b: &Aabb) -> bool {
     s.iter().all(|&x| x >= -eps) || s.iter().all(|&x| x <= eps)
 }
 
-/// The distinct elements of columns `cols` (basis functions, f per element,
-/// consecutive).
+/// The distinct elements of columns `cols` (basis functions, each
+/// element's consecutive).
 fn column_elements(disc: &Discretization, cols: &[usize]) -> Vec<usize> {
-    let f = disc.nodes_per_element();
-    let mut elems: Vec<usize> = cols.iter().map(|&j| j / f).collect();
+    let mut elems: Vec<usize> = cols.iter().map(|&j| disc.element_of(j)).collect();
     elems.dedup();
     elems
 }
@@ -464,7 +476,6 @@ impl Structure for Geometry<'_> {
     /// [`Structure::is_zero`] line by line.
     fn zero_lines(&self, rows: &[usize], cols: &[usize]) -> (Vec<bool>, Vec<bool>) {
         let pts = self.disc.points();
-        let f = self.disc.nodes_per_element();
         let elems = column_elements(self.disc, cols);
         let behind = |i: usize, k: usize| {
             self.plane_of[k].is_some_and(|id| {
@@ -482,7 +493,7 @@ impl Structure for Geometry<'_> {
                 .map(|&i| elems.iter().all(|&k| behind(i, k)))
                 .collect(),
             cols.iter()
-                .map(|&j| zero_elems.contains(&(j / f)))
+                .map(|&j| zero_elems.contains(&self.disc.element_of(j)))
                 .collect(),
         )
     }

@@ -49,15 +49,19 @@ pub(super) struct Trees {
 }
 
 /// `build` given what it may take from `previous`: the matrix of the mesh
-/// a refined one was made from, whose rows and columns are both `f` items
-/// per element ([`element_items`]); None when there is none, or when the
-/// new elements' parents are not known.
+/// a refined one was made from, whose rows and columns are both its
+/// elements' unknowns (`offsets`: the old and the new discretization's
+/// [`crate::discretization::Discretization::offsets`], [`element_items`]);
+/// None when there is none, or when the new elements' parents are not
+/// known.
 pub(super) fn with_elements<T>(
     previous: Option<(&HMatrix, &Unchanged)>,
-    f: usize,
+    offsets: Option<(&[usize], &[usize])>,
     build: impl FnOnce(Option<&Reuse<'_>>) -> T,
 ) -> T {
-    let items = previous.and_then(|(h, u)| Some((h, element_items(u, f)?)));
+    let items = previous
+        .zip(offsets)
+        .and_then(|((h, u), (old, new))| Some((h, element_items(u, old, new)?)));
     let reuse = items.as_ref().map(|(h, (near, same))| Reuse {
         previous: h,
         rows: Changed { near, same },
@@ -66,17 +70,22 @@ pub(super) fn with_elements<T>(
     build(reuse.as_ref())
 }
 
-/// The items of a refined mesh with `f` per element (element k's l-th is
-/// item k f + l): for each, the old item it is or replaces (the same item
-/// of the element it was split from) and whether it is that item
-/// unchanged. None when `unchanged` does not know the new elements'
-/// parents.
-pub fn element_items(unchanged: &Unchanged, f: usize) -> Option<(Vec<usize>, Vec<bool>)> {
-    let mut near = Vec::with_capacity(unchanged.len() * f);
+/// The items of a refined mesh whose element k holds items `new[k]..new[k
+/// + 1]` (the old mesh's, `old`): for each, the old item it is or replaces
+/// (the same item of the element it was split from, or that element's last
+/// when it has fewer) and whether it is that item unchanged. None when
+/// `unchanged` does not know the new elements' parents.
+pub fn element_items(
+    unchanged: &Unchanged,
+    old: &[usize],
+    new: &[usize],
+) -> Option<(Vec<usize>, Vec<bool>)> {
+    let mut near = Vec::with_capacity(new[unchanged.len()]);
     let mut same = Vec::with_capacity(near.capacity());
     for k in 0..unchanged.len() {
         let p = unchanged.parent(k)?;
-        near.extend((0..f).map(|l| p * f + l));
+        let (f, f_old) = (new[k + 1] - new[k], old[p + 1] - old[p]);
+        near.extend((0..f).map(|l| old[p] + l.min(f_old - 1)));
         same.extend(std::iter::repeat_n(unchanged.old(k).is_some(), f));
     }
     Some((near, same))

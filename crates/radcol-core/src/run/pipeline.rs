@@ -13,7 +13,8 @@ use crate::assembly::{AssemblyBackend, AssemblyPlan, BackendInfo, CpuBackend, Un
 use crate::discretization::Discretization;
 use crate::error::Error;
 use crate::estimate::{
-    check_nodes, estimate, estimate_updated, ChannelFields, ErrorEstimate, ESTIMATE_QUAD_TOL,
+    check_discretization, estimate, estimate_updated, ChannelFields, ErrorEstimate,
+    ESTIMATE_QUAD_TOL,
 };
 use crate::mesh::Mesh;
 use crate::nodes::NodeSet;
@@ -202,8 +203,7 @@ fn estimate_channels(
     if let Some(p) = &cfg.progress {
         p.start("estimate", blocks);
     }
-    let nodes = check_nodes(disc.nodes().degree(), disc.nodes().alpha());
-    let check = Arc::new(Discretization::new(disc.mesh().clone(), nodes));
+    let check = Arc::new(check_discretization(disc));
     let check_fields = fields(&check, problem)?;
     let quad = QuadratureOptions {
         tol: cfg.quad.tol.max(ESTIMATE_QUAD_TOL),

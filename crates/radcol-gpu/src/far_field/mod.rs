@@ -62,7 +62,12 @@ pub fn fill_far_field(
 ) -> Result<FarFieldReport, GpuError> {
     let n_dim = plan.dim();
     assert_eq!(matrix.len(), n_dim * n_dim, "matrix must be N × N");
-    let f = plan.discretization().nodes_per_element();
+    let Some(nodes) = plan.discretization().uniform_nodes() else {
+        return Err(GpuError::Unsupported(
+            "a degree per element: the far-field shader takes one node set per assembly".into(),
+        ));
+    };
+    let f = nodes.len();
     if f > MAX_NODES_PER_ELEMENT {
         return Err(GpuError::Unsupported(format!(
             "{f} nodes per element: the far-field shader holds at most {MAX_NODES_PER_ELEMENT} (r = 6)"

@@ -39,7 +39,7 @@ impl<'a> Rules<'a> {
                 far: 1,
             };
             used.push((t, stride, basis_t.len()));
-            basis_t.extend_from_slice(&t.basis_t);
+            basis_t.extend_from_slice(&t.basis_t[0]);
             stride += t.nq;
         }
         Ok(Self {
@@ -143,11 +143,11 @@ mod tests {
                     assert_eq!((info.offset, info.nq, info.far), (stride, t.nq as u32, 1));
                     assert_eq!(info.basis as usize, basis);
                     assert_eq!(
-                        &rules.basis_t[basis..basis + t.basis_t.len()],
-                        &t.basis_t[..]
+                        &rules.basis_t[basis..basis + t.basis_t[0].len()],
+                        &t.basis_t[0][..]
                     );
                     stride += t.nq as u32;
-                    basis += t.basis_t.len();
+                    basis += t.basis_t[0].len();
                 }
                 None => assert_eq!(info.far, 0, "degree {d} is unused"),
             }
@@ -181,7 +181,7 @@ mod tests {
     #[test]
     fn tile_codes_and_params_describe_the_tile() {
         let plan = plan();
-        let f = plan.discretization().nodes_per_element();
+        let f = plan.discretization().max_nodes_per_element();
         // Rows 4..10 touch row blocks 1..=3 (f = 3); elements 2..7.
         let tile = Tile {
             row0: 4,

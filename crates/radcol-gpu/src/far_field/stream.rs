@@ -225,7 +225,8 @@ pub(super) fn run<S: GpuScalar>(
     let disc = plan.discretization();
     let n_dim = plan.dim();
     let n = disc.mesh().len();
-    let f = disc.nodes_per_element();
+    // One node set (checked by `fill_far_field`).
+    let f = disc.max_nodes_per_element();
     let rules = Rules::new(plan)?;
     if rules.used.is_empty() || n_dim == 0 {
         matrix.fill(0.0);

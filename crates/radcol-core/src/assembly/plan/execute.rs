@@ -16,10 +16,8 @@ struct BlockFill<'a, 'i> {
     pts: &'a [CollocationPoint],
     integrator: &'a ElementIntegrator<'i>,
     phi: &'a Integrand<'a>,
-    /// Basis functions per element (columns per element).
-    f: usize,
     ncols: usize,
-    /// The element of the block's first column.
+    /// The block's first column (an element's first unknown).
     first: usize,
 }
 
@@ -49,7 +47,7 @@ impl AssemblyPlan {
             .expect("partial pairs exist only with occluders");
         let cands = self.partial[kp].candidates_of(k);
         let verts = self.disc.mesh().vertices(k);
-        let r = self.disc.nodes().degree();
+        let r = self.disc.degree(k);
         let fp = FieldPoint {
             position,
             normal,
@@ -82,7 +80,7 @@ impl AssemblyPlan {
     /// kernel evaluations.
     pub fn fill_block(&self, kp: usize, block: &mut [f64], mode: FillMode) -> u64 {
         // Columns whose entries are the previous matrix's (FillMode::NotReused).
-        let unchanged = self.unchanged.as_deref().filter(|u| u.old(kp).is_some());
+        let unchanged = self.unchanged().filter(|u| u.old(kp).is_some());
         let skip =
             |k: usize| mode == FillMode::NotReused && unchanged.is_some_and(|u| u.old(k).is_some());
         let mode = match mode {
@@ -115,23 +113,20 @@ impl AssemblyPlan {
             return 0;
         }
         let n = self.disc.mesh().len();
-        let f = self.disc.nodes_per_element();
-        let f_rows = self.rows().nodes_per_element();
-        let ncols = n * f;
-        debug_assert_eq!(block.len(), f_rows * ncols);
+        let ncols = self.disc.len();
+        debug_assert_eq!(block.len(), self.rows().nodes_per(kp) * ncols);
         let classes = self.classes.row(kp, 0..n);
         let integrator = self.integrator();
-        let nodes = self.disc.nodes();
-        let phi = |_k: usize, st: [f64; 2], _q: DVec3, out: &mut [f64]| {
-            nodes.eval_basis(st[0], st[1], out)
+        let disc = &*self.disc;
+        let phi = |k: usize, st: [f64; 2], _q: DVec3, out: &mut [f64]| {
+            disc.nodes_of(k).eval_basis(st[0], st[1], out)
         };
         let fill = BlockFill {
             plan: self,
             kp,
-            pts: &self.rows().points()[kp * f_rows..(kp + 1) * f_rows],
+            pts: &self.rows().points()[self.rows().range(kp)],
             integrator: &integrator,
             phi: &phi,
-            f,
             ncols,
             first: 0,
         };
@@ -147,9 +142,15 @@ impl AssemblyPlan {
             // A run of consecutive elements with one class: refinement numbers
             // children consecutively, so neighbours in space share a rule and
             // their rule points are contiguous in the far table.
-            let class = classes[k];
+            // Far runs share the basis table of one node set.
+            let (class, set) = (classes[k], disc.set_index(k));
             let mut end = k + 1;
-            while end < n && end - k < RUN_CHUNK && classes[end] == class && !skip(end) {
+            while end < n
+                && end - k < RUN_CHUNK
+                && classes[end] == class
+                && disc.set_index(end) == set
+                && !skip(end)
+            {
                 end += 1;
             }
             evals += fill.run(PairClass::from_code(class), k..end, block, mode, &mut g);
@@ -188,35 +189,35 @@ impl AssemblyPlan {
         elements: std::ops::Range<usize>,
         out: &mut [f64],
     ) -> u64 {
-        let f = self.disc.nodes_per_element();
-        let f_rows = self.rows().nodes_per_element();
-        let ncols = elements.len() * f;
+        let disc = &*self.disc;
+        let cols = disc.range_of(elements.clone());
+        let ncols = cols.len();
         debug_assert_eq!(out.len(), rows.len() * ncols);
         let integrator = self.integrator();
-        let nodes = self.disc.nodes();
-        let phi = |_k: usize, st: [f64; 2], _q: DVec3, out: &mut [f64]| {
-            nodes.eval_basis(st[0], st[1], out)
+        let phi = |k: usize, st: [f64; 2], _q: DVec3, out: &mut [f64]| {
+            disc.nodes_of(k).eval_basis(st[0], st[1], out)
         };
-        let first_row = kp * f_rows;
+        let first_row = self.rows().offset(kp);
         let fill = BlockFill {
             plan: self,
             kp,
             pts: &self.rows().points()[first_row + rows.start..first_row + rows.end],
             integrator: &integrator,
             phi: &phi,
-            f,
             ncols,
-            first: elements.start,
+            first: cols.start,
         };
         let max_nq = self.max_nq();
         // Sized to the run, not RUN_CHUNK: samples of one element are common.
         let mut g = vec![0.0f64; elements.len().min(RUN_CHUNK) * max_nq];
         let mut evals = 0u64;
         for (run, class) in self.classes.runs(kp, elements) {
-            for start in run.clone().step_by(RUN_CHUNK) {
-                let chunk = start..(start + RUN_CHUNK).min(run.end);
-                let class = PairClass::from_code(class);
-                evals += fill.run(class, chunk, out, FillMode::All, &mut g);
+            for same_set in disc.runs_of_one_set(run) {
+                for start in same_set.clone().step_by(RUN_CHUNK) {
+                    let chunk = start..(start + RUN_CHUNK).min(same_set.end);
+                    let class = PairClass::from_code(class);
+                    evals += fill.run(class, chunk, out, FillMode::All, &mut g);
+                }
             }
         }
         evals
@@ -235,10 +236,11 @@ impl BlockFill<'_, '_> {
         mode: FillMode,
         g: &mut [f64],
     ) -> u64 {
-        let (f, ncols) = (self.f, self.ncols);
+        let ncols = self.ncols;
         match class {
             PairClass::Culled if mode == FillMode::All => {
-                let (a, b) = ((run.start - self.first) * f, (run.end - self.first) * f);
+                let cols = self.plan.disc.range_of(run);
+                let (a, b) = (cols.start - self.first, cols.end - self.first);
                 for row in 0..self.pts.len() {
                     block[row * ncols + a..row * ncols + b].fill(0.0);
                 }
@@ -257,16 +259,14 @@ impl BlockFill<'_, '_> {
     /// The output slot of element `ke` in row `row` of the block.
     #[inline]
     fn slot<'b>(&self, block: &'b mut [f64], row: usize, ke: usize) -> &'b mut [f64] {
-        let (f, ncols) = (self.f, self.ncols);
-        let ke = ke - self.first;
-        &mut block[row * ncols + ke * f..row * ncols + (ke + 1) * f]
+        let cols = self.plan.disc.range(ke);
+        let (a, b) = (cols.start - self.first, cols.end - self.first);
+        &mut block[row * self.ncols + a..row * self.ncols + b]
     }
 
     /// Near and on-element pairs: adaptive subdivision (for every row at
     /// once) or the split-at-P rule (row by row).
     fn adaptive(&self, run: std::ops::Range<usize>, block: &mut [f64]) -> u64 {
-        let r = self.plan.disc.nodes().degree();
-        let f = self.f;
         let off: Vec<FieldPoint> = self
             .pts
             .iter()
@@ -276,11 +276,13 @@ impl BlockFill<'_, '_> {
                 on_element: None,
             })
             .collect();
-        let mut rows = vec![0.0; off.len() * f];
         let mut evals = 0;
+        let mut rows = Vec::new();
         for ke in run {
+            let (r, f) = (self.plan.disc.degree(ke), self.plan.disc.nodes_per(ke));
             if ke != self.kp {
-                rows.fill(0.0);
+                rows.clear();
+                rows.resize(off.len() * f, 0.0);
                 evals += self
                     .integrator
                     .integrate_rows(&off, ke, r, self.phi, &mut rows);
@@ -333,7 +335,9 @@ impl BlockFill<'_, '_> {
         block: &mut [f64],
         g: &mut [f64],
     ) -> u64 {
-        let (f, ncols) = (self.f, self.ncols);
+        let ncols = self.ncols;
+        let set = self.plan.disc.set_index(run.start);
+        let f = self.plan.disc.nodes_per(run.start);
         let t = self.plan.tables[degree as usize]
             .as_ref()
             .expect("plan builds every table it uses");
@@ -353,9 +357,10 @@ impl BlockFill<'_, '_> {
                 }
                 (None, None) => unreachable!("a table is flat or holds its points"),
             }
-            let (a, b) = ((run.start - self.first) * f, (run.end - self.first) * f);
+            let cols = self.plan.disc.range_of(run.clone());
+            let (a, b) = (cols.start - self.first, cols.end - self.first);
             let out = &mut block[row * ncols + a..row * ncols + b];
-            contract(g, &t.basis_t, nq, f, out);
+            contract(g, &t.basis_t[set], nq, f, out);
         }
         (self.pts.len() * len) as u64
     }

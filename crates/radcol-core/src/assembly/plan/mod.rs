@@ -93,7 +93,9 @@ pub struct AssemblyPlan {
     occluders: Option<Occluders>,
     partial: Vec<PartialRow>,
     progress: Option<ProgressHandle>,
-    unchanged: Option<Arc<Unchanged>>,
+    /// With `unchanged`: the previous plan's columns' and rows'
+    /// discretizations.
+    unchanged: Option<(Arc<Unchanged>, Arc<Discretization>, Arc<Discretization>)>,
 }
 
 impl AssemblyPlan {
@@ -142,10 +144,10 @@ impl AssemblyPlan {
             "rows and columns on one mesh"
         );
         let prev = previous.filter(|(p, u)| {
-            p.rows.as_ref().is_some_and(|r| {
-                r.nodes().degree() == rows.nodes().degree()
-                    && r.nodes().alpha() == rows.nodes().alpha()
-            }) && p.reusable_by(&disc, &opts, visibility, u)
+            p.rows
+                .as_ref()
+                .is_some_and(|r| same_nodes_where_unchanged(r, &rows, u))
+                && p.reusable_by(&disc, &opts, visibility, u)
         });
         Self::build(disc, Some(rows), opts, visibility, None, prev)
     }
@@ -159,11 +161,10 @@ impl AssemblyPlan {
         unchanged: &Unchanged,
     ) -> bool {
         self.opts == *opts
-            && self.disc.nodes().degree() == disc.nodes().degree()
-            && self.disc.nodes().alpha() == disc.nodes().alpha()
             && self.visibility.needed == visibility.needed
             && unchanged.len() == disc.mesh().len()
             && unchanged.old_len() == self.disc.mesh().len()
+            && same_nodes_where_unchanged(&self.disc, disc, unchanged)
     }
 
     /// [`AssemblyPlan::with_progress`] for a mesh refined from `previous`'s
@@ -208,8 +209,7 @@ impl AssemblyPlan {
             prev.as_ref().map(|(p, u)| (*p, &**u)),
         );
         let ladder = RuleLadder::new();
-        let f_rows = rows.as_ref().unwrap_or(&disc).nodes_per_element();
-        let (stats, used) = count(&classes, f_rows, &ladder);
+        let (stats, used) = count(&classes, rows.as_deref().unwrap_or(&disc), &ladder);
         let flat = tables::flat_elements(disc.mesh());
         let tables = (0..=MAX_RULE_DEGREE)
             .map(|d| used[d].then(|| tables::build_table(&disc, &ladder, d, flat.as_ref())))
@@ -228,14 +228,26 @@ impl AssemblyPlan {
             occluders,
             partial,
             progress,
-            unchanged: prev.map(|(_, u)| u),
+            unchanged: prev.map(|(p, u)| (u, p.disc.clone(), p.rows().clone())),
         }
     }
 
     /// The relation to the previous plan's elements, for a plan built by
     /// [`AssemblyPlan::updating`] that reused it.
     pub fn unchanged(&self) -> Option<&Unchanged> {
-        self.unchanged.as_deref()
+        self.unchanged.as_ref().map(|(u, _, _)| &**u)
+    }
+
+    /// With [`AssemblyPlan::unchanged`]: where each element's unknowns
+    /// begin in the previous plan ([`Discretization::offsets`]).
+    pub fn previous_offsets(&self) -> Option<&[usize]> {
+        self.unchanged.as_ref().map(|(_, d, _)| d.offsets())
+    }
+
+    /// With [`AssemblyPlan::unchanged`]: where each element's rows begin in
+    /// the previous plan.
+    pub fn previous_row_offsets(&self) -> Option<&[usize]> {
+        self.unchanged.as_ref().map(|(_, _, r)| r.offsets())
     }
 
     /// Whether this plan models visibility, and why.
@@ -339,8 +351,6 @@ fn classify_all(
 ) -> (ClassTable, Vec<PartialRow>) {
     let mesh = disc.mesh();
     let n = mesh.len();
-    let f = rows.nodes_per_element();
-    let r = disc.nodes().degree();
     let shapes = ElementShapes::new(mesh);
     let pts = rows.points();
     let tree = match occluders {
@@ -355,7 +365,7 @@ fn classify_all(
             if progress.as_ref().is_some_and(|p| p.cancelled()) {
                 return (ClassTable::encode(n, &vec![0u8; n]), PartialRow::default());
             }
-            let block = &pts[kp * f..(kp + 1) * f];
+            let block = &pts[rows.range(kp)];
             // The previous plan's row of this element, when it is unchanged.
             let old = prev.and_then(|(p, u)| u.old(kp).map(|op| (p, u, op)));
             let reused = |k: usize| old.is_some_and(|(_, u, _)| u.old(k).is_some());
@@ -365,12 +375,12 @@ fn classify_all(
                     (0..n)
                         .map(|k| match u.old(k) {
                             Some(ok) => old_row[ok],
-                            None => shapes.classify(kp, block, k, tol, r).code(),
+                            None => shapes.classify(kp, block, k, tol, disc.degree(k)).code(),
                         })
                         .collect()
                 }
                 None => (0..n)
-                    .map(|k| shapes.classify(kp, block, k, tol, r).code())
+                    .map(|k| shapes.classify(kp, block, k, tol, disc.degree(k)).code())
                     .collect(),
             };
             let mut partial = PartialRow::default();
@@ -419,18 +429,36 @@ fn classify_all(
     (ClassTable::from_encoded(n, classes), partial)
 }
 
+/// Whether the elements `unchanged` keeps have the same node set (degree
+/// and α) in `new` as in `old`: only then are their pairs' classes and
+/// entries the same.
+fn same_nodes_where_unchanged(
+    old: &Discretization,
+    new: &Discretization,
+    unchanged: &Unchanged,
+) -> bool {
+    (0..new.mesh().len()).all(|k| {
+        unchanged.old(k).is_none_or(|ok| {
+            let (a, b) = (old.nodes_of(ok), new.nodes_of(k));
+            a.degree() == b.degree() && a.alpha() == b.alpha()
+        })
+    })
+}
+
 /// Pair statistics and the far-rule degrees in use.
 fn count(
     classes: &ClassTable,
-    f: usize,
+    rows: &Discretization,
     ladder: &RuleLadder,
 ) -> (PlanStats, [bool; MAX_RULE_DEGREE + 1]) {
     let mut used = [false; MAX_RULE_DEGREE + 1];
     let mut stats = PlanStats::default();
-    let f64_ = f as u64;
-    let runs = (0..classes.len()).flat_map(|kp| classes.runs(kp, 0..classes.width()));
-    for (run, c) in runs {
-        let pairs = f64_ * run.len() as u64;
+    let runs = (0..classes.len()).flat_map(|kp| {
+        let f = rows.nodes_per(kp);
+        classes.runs(kp, 0..classes.width()).map(move |r| (r, f))
+    });
+    for ((run, c), f) in runs {
+        let pairs = (f * run.len()) as u64;
         match PairClass::from_code(c) {
             PairClass::Culled => stats.pairs_culled += pairs,
             PairClass::Near => stats.pairs_near += pairs,

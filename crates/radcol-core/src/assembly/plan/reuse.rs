@@ -109,25 +109,18 @@ impl Unchanged {
     }
 
     /// Copies the entries of the pairs of unchanged elements from `previous`
-    /// (the old mesh's N_old × N_old matrix with `f` unknowns per element)
-    /// into `matrix` (the refined mesh's).
-    pub fn copy_blocks(&self, previous: &DenseMatrix, matrix: &mut DenseMatrix, f: usize) {
-        self.copy_blocks_of(previous, matrix, f, f);
-    }
-
-    /// [`Unchanged::copy_blocks`] for matrices with `fr` rows and `fc`
-    /// columns per element (an [`AssemblyPlan::at_points`] plan's: rows at
-    /// other points than the nodes).
-    ///
-    /// [`AssemblyPlan::at_points`]: crate::assembly::AssemblyPlan::at_points
-    pub fn copy_blocks_of(
+    /// (the old mesh's matrix, element k's rows and columns
+    /// `old[k]..old[k + 1]`) into `matrix` (the refined mesh's, `new`
+    /// likewise; [`crate::discretization::Discretization::offsets`]). An
+    /// unchanged element has as many unknowns in both.
+    pub fn copy_blocks(
         &self,
         previous: &DenseMatrix,
         matrix: &mut DenseMatrix,
-        fr: usize,
-        fc: usize,
+        old: &[usize],
+        new: &[usize],
     ) {
-        let (n_new, n_old) = (self.len() * fc, self.old_len() * fc);
+        let (n_old, n_new) = (old[self.old_len()], new[self.len()]);
         assert_eq!(
             (
                 previous.nrows(),
@@ -135,23 +128,22 @@ impl Unchanged {
                 matrix.nrows(),
                 matrix.ncols()
             ),
-            (self.old_len() * fr, n_old, self.len() * fr, n_new)
+            (n_old, n_old, n_new, n_new)
         );
         let cols: Vec<(usize, usize)> = (0..self.len())
             .filter_map(|k| self.old(k).map(|ok| (k, ok)))
             .collect();
-        let old = previous.as_slice();
-        matrix
-            .as_mut_slice()
-            .par_chunks_exact_mut(fr * n_new)
+        let src = previous.as_slice();
+        crate::matrix::row_blocks(matrix.as_mut_slice(), new, n_new)
+            .into_par_iter()
             .enumerate()
             .for_each(|(kp, block)| {
                 let Some(op) = self.old(kp) else { return };
-                for a in 0..fr {
-                    let src = &old[(op * fr + a) * n_old..(op * fr + a + 1) * n_old];
+                for a in 0..new[kp + 1] - new[kp] {
+                    let src = &src[(old[op] + a) * n_old..(old[op] + a + 1) * n_old];
                     let dst = &mut block[a * n_new..(a + 1) * n_new];
                     for &(k, ok) in &cols {
-                        dst[k * fc..(k + 1) * fc].copy_from_slice(&src[ok * fc..(ok + 1) * fc]);
+                        dst[new[k]..new[k + 1]].copy_from_slice(&src[old[ok]..old[ok + 1]]);
                     }
                 }
             });
@@ -184,7 +176,6 @@ mod tests {
     #[test]
     fn copies_the_unchanged_pairs_only() {
         // Old: 2 elements, f = 2; new: old 1, a new element, old 0.
-        let f = 2;
         let mut prev = DenseMatrix::zeros(4, 4);
         for (i, v) in prev.as_mut_slice().iter_mut().enumerate() {
             *v = i as f64;
@@ -192,7 +183,7 @@ mod tests {
         let u = Unchanged::new(&[Some(1), None, Some(0)], 2);
         let mut m = DenseMatrix::zeros(6, 6);
         m.as_mut_slice().fill(-1.0);
-        u.copy_blocks(&prev, &mut m, f);
+        u.copy_blocks(&prev, &mut m, &[0, 2, 4], &[0, 2, 4, 6]);
         let at = |m: &DenseMatrix, i: usize, j: usize| m.as_slice()[i * m.ncols() + j];
         // New row 0 = old row 2; new column 4 = old column 0.
         assert_eq!(at(&m, 0, 0), at(&prev, 2, 2));

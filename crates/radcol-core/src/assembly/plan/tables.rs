@@ -33,11 +33,12 @@ pub struct FarTable {
     pub degree: usize,
     /// Rule points per element.
     pub nq: usize,
-    /// Lagrange basis at the rule points, `f_r × nq`, row j contiguous:
-    /// `basis[j * nq + q]` = l_j(point q).
-    pub basis: Vec<f64>,
-    /// The same, transposed: `basis_t[q * f_r + j]`.
-    pub basis_t: Vec<f64>,
+    /// Per node set of the discretization ([`Discretization::node_sets`]),
+    /// its Lagrange basis at the rule points, `f_r × nq`, row j contiguous:
+    /// `basis[set][j * nq + q]` = l_j(point q).
+    pub basis: Vec<Vec<f64>>,
+    /// The same, transposed: `basis_t[set][q * f_r + j]`.
+    pub basis_t: Vec<Vec<f64>>,
     /// The rule's points (s, t) in σ and its weights / π.
     s: Vec<f64>,
     t: Vec<f64>,
@@ -200,8 +201,8 @@ impl FarTable {
             Points::Flat(_) => 0,
             Points::Stored(s) => s.heap_bytes(),
         };
-        8 * (self.basis.capacity()
-            + self.basis_t.capacity()
+        8 * (self.basis.iter().map(Vec::capacity).sum::<usize>()
+            + self.basis_t.iter().map(Vec::capacity).sum::<usize>()
             + self.s.capacity()
             + self.t.capacity()
             + self.w.capacity())
@@ -228,16 +229,21 @@ pub(super) fn build_table(
     let rule = ladder.rule(d);
     let nq = rule.len();
     let mesh = disc.mesh();
-    let f = disc.nodes_per_element();
-    let mut basis = vec![0.0; f * nq];
-    let mut basis_t = vec![0.0; f * nq];
-    let mut l = vec![0.0; f];
-    for (q, &[s, t]) in rule.points.iter().enumerate() {
-        disc.nodes().eval_basis(s, t, &mut l);
-        for j in 0..f {
-            basis[j * nq + q] = l[j];
-            basis_t[q * f + j] = l[j];
+    let (mut basis, mut basis_t) = (Vec::new(), Vec::new());
+    for nodes in disc.node_sets() {
+        let f = nodes.len();
+        let mut b = vec![0.0; f * nq];
+        let mut b_t = vec![0.0; f * nq];
+        let mut l = vec![0.0; f];
+        for (q, &[s, t]) in rule.points.iter().enumerate() {
+            nodes.eval_basis(s, t, &mut l);
+            for j in 0..f {
+                b[j * nq + q] = l[j];
+                b_t[q * f + j] = l[j];
+            }
         }
+        basis.push(b);
+        basis_t.push(b_t);
     }
     let points = match flat {
         Some(e) => Points::Flat(Arc::clone(e)),

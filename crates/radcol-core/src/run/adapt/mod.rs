@@ -428,15 +428,14 @@ fn transfer(out: &SolveOutcome, refined: &Mesh, parents: &[usize]) -> Vec<Vec<f6
 
 /// `solution` at the nodes of `refined` (a mesh [`refine`] made from its
 /// mesh, each element's `parents` element): on each element, its parent's
-/// polynomial.
+/// polynomial at the nodes of its parent's node set.
 pub fn on_refined(solution: &Solution, refined: &Mesh, parents: &[usize]) -> Vec<f64> {
     let disc = solution.discretization();
     let old = disc.mesh();
-    let nodes = disc.nodes();
-    let mut at = Vec::with_capacity(refined.len() * nodes.len());
+    let mut at = Vec::with_capacity(refined.len() * disc.max_nodes_per_element());
     for (k, e) in refined.elements().iter().enumerate() {
         let [a, b, c] = old.elements()[parents[k]].param;
-        for &[s, t] in nodes.points() {
+        for &[s, t] in disc.nodes_of(parents[k]).points() {
             let [s, t] = barycentric_st(a, b, c, e.param_point(s, t)).unwrap_or([s, t]);
             at.push(solution.eval(parents[k], s, t));
         }
