@@ -296,3 +296,30 @@ fn products_with_several_vectors_equal_single_ones() {
         assert!(rel(a, b) < 1e-14, "{}", rel(a, b));
     }
 }
+
+/// A degree per element (1..=3 in runs along the refinement order, so that
+/// clusters hold elements of several degrees): the compressed operator's
+/// product tracks the dense one's to the tolerance, and its rows sum to 1
+/// in the closed room.
+#[test]
+fn a_degree_per_element_compressed_against_dense() {
+    let surface = scene("room");
+    let vis = visibility::analyze(&surface);
+    let mesh = Arc::new(Mesh::new(surface, 3));
+    let sets = (1..=3).map(|r| NodeSet::new(r, 0.1).unwrap()).collect();
+    let degrees: Vec<usize> = (0..mesh.len()).map(|k| 1 + (k / 5) % 3).collect();
+    let disc = Arc::new(Discretization::with_degrees(mesh, sets, &degrees).unwrap());
+    let plan = AssemblyPlan::new(disc, QuadratureOptions::default(), &vis);
+    let dense = CpuBackend.assemble(&plan).unwrap().matrix;
+    let c = Case { plan, dense };
+    check("room, r = 1..3 by element", &c);
+    let h = PlanEntries::new(&c.plan).build(&HOptions {
+        tol: 1e-8,
+        ..Default::default()
+    });
+    let n = c.dense.nrows();
+    let mut y = vec![0.0; n];
+    h.matvec(&vec![1.0; n], &mut y);
+    let worst = y.iter().map(|s| (s - 1.0).abs()).fold(0.0, f64::max);
+    assert!(worst < 1e-6, "{worst:e}");
+}

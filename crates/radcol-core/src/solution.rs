@@ -236,6 +236,49 @@ mod tests {
     use crate::mesh::Mesh;
     use crate::nodes::NodeSet;
 
+    /// With a degree per element, u_n evaluates each element's own
+    /// polynomial (a quadratic in x, y, z is reproduced on flat elements
+    /// of degree ≥ 2, a linear one on degree 1), its integral is the
+    /// closed form, and the limiter works element by element.
+    #[test]
+    fn a_degree_per_element() {
+        let mesh = Arc::new(Mesh::new(Arc::new(box_room(1.0, 2.0, 1.5)), 1));
+        let sets = (1..=3).map(|r| NodeSet::new(r, 0.1).unwrap()).collect();
+        let degrees: Vec<usize> = (0..mesh.len()).map(|k| 1 + k % 3).collect();
+        let disc = Arc::new(Discretization::with_degrees(mesh.clone(), sets, &degrees).unwrap());
+        let lin = |p: DVec3| 1.0 + p.x + 2.0 * p.y - p.z;
+        let values = disc.points().iter().map(|p| lin(p.position)).collect();
+        let u = Solution::new(disc.clone(), values);
+        for k in 0..mesh.len() {
+            for (s, t) in [(0.0, 0.0), (1.0, 0.0), (0.2, 0.7), (0.5, 0.5)] {
+                let p = mesh.point(k, s, t).position;
+                crate::assert_close!(u.eval(k, s, t), lin(p), 1e-13);
+            }
+        }
+        // ∫ over the box's walls of 1 + x + 2y − z: the area plus each
+        // wall's area times its centroid's x + 2y − z, from the walls' own
+        // centroids (box [0, 1] × [0, 2] × [0, 1.5]).
+        let walls = [
+            (2.0 * 1.5, DVec3::new(0.0, 1.0, 0.75)),
+            (2.0 * 1.5, DVec3::new(1.0, 1.0, 0.75)),
+            (1.0 * 1.5, DVec3::new(0.5, 0.0, 0.75)),
+            (1.0 * 1.5, DVec3::new(0.5, 2.0, 0.75)),
+            (1.0 * 2.0, DVec3::new(0.5, 1.0, 0.0)),
+            (1.0 * 2.0, DVec3::new(0.5, 1.0, 1.5)),
+        ];
+        let exact: f64 = walls.iter().map(|(a, c)| a * lin(*c)).sum();
+        crate::assert_close!(u.integral(), exact, 1e-12 * exact);
+        let mut values = vec![1.0; disc.len()];
+        let k3 = (0..mesh.len()).find(|&k| degrees[k] == 3).unwrap();
+        values[disc.range(k3).start + 4] = -3.0;
+        let u = Solution::new(disc.clone(), values);
+        let (v, report) = u.limited_nonnegative().expect("u_n < 0 on one element");
+        assert_eq!(report.elements, 1);
+        assert!(report.change[k3] > 0.0);
+        assert!(lattice_min(&v, k3) >= 0.0);
+        crate::assert_close!(v.integral(), u.integral(), 1e-13 * u.integral());
+    }
+
     fn lattice_min(s: &Solution, k: usize) -> f64 {
         let m = LIMITER_LATTICE;
         (0..=m)

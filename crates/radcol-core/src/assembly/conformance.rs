@@ -288,6 +288,21 @@ mod tests {
         }
     }
 
+    /// Lemma 1(c) with a degree per element: every case bounds its
+    /// enclosure (the box room and the room with a cube are closed, the
+    /// ellipsoid convex), so each row sums to 1 (∫_S G V dS_Q = π, and each
+    /// element's basis sums to 1 whatever its degree).
+    #[test]
+    fn a_degree_per_element_keeps_unit_row_sums() {
+        for (name, p) in mixed_degree_cases() {
+            let m = CpuBackend.assemble(&p).unwrap().matrix;
+            for i in 0..m.nrows() {
+                let sum: f64 = m.row(i).iter().sum();
+                assert!((sum - 1.0).abs() <= 1e-11, "{name}: row {i} sums to {sum}");
+            }
+        }
+    }
+
     #[test]
     fn comparison_names_the_entry_that_differs() {
         let want = DenseMatrix::from_row_major(2, 2, vec![1.0, 2.0, 3.0, 4.0]);

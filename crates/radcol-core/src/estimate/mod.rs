@@ -366,6 +366,60 @@ fn summarise(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::assembly::QuadratureOptions;
+    use crate::geometry::shapes::sphere;
+    use crate::mesh::Mesh;
+    use std::sync::Arc;
+
+    /// With a degree per element (1..=3), the check points follow each
+    /// element's degree, and the estimate of u_n = the interpolant of
+    /// exp(z) on the sphere with ρ = 0 (so η = E − u_n, the interpolation
+    /// error) tracks each element's true error, sampled on its lattice,
+    /// whatever its degree.
+    #[test]
+    fn a_degree_per_element_is_estimated_element_by_element() {
+        let mesh = Arc::new(Mesh::new(Arc::new(sphere(1.0)), 1));
+        let sets = (1..=3).map(|r| NodeSet::new(r, 0.1).unwrap()).collect();
+        let degrees: Vec<usize> = (0..mesh.len()).map(|k| 1 + k % 3).collect();
+        let disc = Arc::new(Discretization::with_degrees(mesh.clone(), sets, &degrees).unwrap());
+        let check = Arc::new(check_discretization(&disc));
+        for k in 0..mesh.len() {
+            assert_eq!(check.degree(k), degrees[k] + 1);
+        }
+        let u = |i: usize, d: &Discretization| d.points()[i].position.z.exp();
+        let nodal: Vec<f64> = (0..disc.len()).map(|i| u(i, &disc)).collect();
+        let solution = Solution::new(disc.clone(), nodal.clone());
+        let at_check: Vec<f64> = (0..check.len()).map(|i| u(i, &check)).collect();
+        let rho = vec![0.0; check.len()];
+        let visibility = crate::visibility::analyze(mesh.surface());
+        let quad = QuadratureOptions::default();
+        let plan = AssemblyPlan::at_points(disc.clone(), check, quad, &visibility, None);
+        let fields = ChannelFields {
+            solution: &solution,
+            rho: &rho,
+            emission: &at_check,
+            emission_nodes: &nodal,
+        };
+        let e = estimate(&plan, &[fields]).remove(0);
+        let mut by_degree = [0usize; 4];
+        for k in 0..mesh.len() {
+            let truth = (0..=LATTICE)
+                .flat_map(|a| (0..=LATTICE - a).map(move |b| (a, b)))
+                .map(|(a, b)| {
+                    let (s, t) = (a as f64 / LATTICE as f64, b as f64 / LATTICE as f64);
+                    (mesh.point(k, s, t).position.z.exp() - solution.eval(k, s, t)).abs()
+                })
+                .fold(0.0, f64::max);
+            let eff = e.elements[k] / truth;
+            assert!(
+                (0.3..=3.0).contains(&eff),
+                "element {k}, r = {}: effectivity {eff}",
+                degrees[k]
+            );
+            by_degree[degrees[k]] += 1;
+        }
+        assert!(by_degree[1..].iter().all(|&c| c > 0), "{by_degree:?}");
+    }
 
     /// The check points are never the nodes, for any degree and α.
     #[test]

@@ -2,6 +2,7 @@
 //! for rows, basis functions for columns), ordered so that every cluster is a
 //! contiguous range, split by geometric bisection of bounding boxes.
 
+use crate::discretization::Discretization;
 use glam::DVec3;
 
 /// An axis-aligned box.
@@ -253,6 +254,44 @@ impl Walk<'_> {
         old_of[id] = same.then_some(c);
         Some(id)
     }
+}
+
+/// The boxes of `disc`'s rows (its collocation points) and columns (each
+/// basis function's element, by its bounding ball).
+pub(super) fn boxes(disc: &Discretization) -> (Vec<Aabb>, Vec<Aabb>) {
+    let rows = disc
+        .points()
+        .iter()
+        .map(|p| Aabb {
+            lo: p.position,
+            hi: p.position,
+        })
+        .collect();
+    let mesh = disc.mesh();
+    let cols = (0..mesh.len())
+        .flat_map(|k| {
+            // A flat element's own corners: the cube of its bounding ball
+            // reaches through the planes of the faces it meets, so a wall's
+            // elements along the floor cut the floor's plane, and every
+            // block of floor rows against them was split to its leaves
+            // (the room's near field grew like N^1.4).
+            let b = if mesh.is_flat(k) {
+                let v = mesh.vertices(k);
+                Aabb {
+                    lo: v[0].min(v[1]).min(v[2]),
+                    hi: v[0].max(v[1]).max(v[2]),
+                }
+            } else {
+                let (c, r) = mesh.bounding_ball(k);
+                Aabb {
+                    lo: c - DVec3::splat(r),
+                    hi: c + DVec3::splat(r),
+                }
+            };
+            std::iter::repeat_n(b, disc.nodes_per(k))
+        })
+        .collect();
+    (rows, cols)
 }
 
 #[cfg(test)]

@@ -4,7 +4,7 @@
 //! pairs, exact clipping of partly visible pairs), blocks whose element pairs
 //! the plan culled (facing away, or hidden) zero without a kernel call.
 
-use super::cluster::Aabb;
+use super::cluster::{boxes, Aabb};
 use super::consecutive_runs;
 use super::reuse::with_elements;
 use super::{Entries, HMatrix, HOptions, HPrediction, SampledSize, Structure};
@@ -312,44 +312,6 @@ impl PlanEntries<'_> {
             })
         })
     }
-}
-
-/// The boxes of `disc`'s rows (its collocation points) and columns (each
-/// basis function's element, by its bounding ball).
-fn boxes(disc: &Discretization) -> (Vec<Aabb>, Vec<Aabb>) {
-    let rows = disc
-        .points()
-        .iter()
-        .map(|p| Aabb {
-            lo: p.position,
-            hi: p.position,
-        })
-        .collect();
-    let mesh = disc.mesh();
-    let cols = (0..mesh.len())
-        .flat_map(|k| {
-            // A flat element's own corners: the cube of its bounding ball
-            // reaches through the planes of the faces it meets, so a wall's
-            // elements along the floor cut the floor's plane, and every
-            // block of floor rows against them was split to its leaves
-            // (the room's near field grew like N^1.4).
-            let b = if mesh.is_flat(k) {
-                let v = mesh.vertices(k);
-                Aabb {
-                    lo: v[0].min(v[1]).min(v[2]),
-                    hi: v[0].max(v[1]).max(v[2]),
-                }
-            } else {
-                let (c, r) = mesh.bounding_ball(k);
-                Aabb {
-                    lo: c - DVec3::splat(r),
-                    hi: c + DVec3::splat(r),
-                }
-            };
-            std::iter::repeat_n(b, disc.nodes_per(k))
-        })
-        .collect();
-    (rows, cols)
 }
 
 /// Whether the box lies wholly on one side of the plane through `p` with
