@@ -185,3 +185,21 @@ fn gpu_rows_of_the_sphere_sum_to_one() {
         assert_close("sphere row sum", i, s, 1.0, tol);
     }
 }
+
+/// The far-field shader takes one node set per assembly: a plan with a
+/// degree per element is refused with a message that says so and names the
+/// CPU backend, before any work.
+#[test]
+fn gpu_refuses_a_degree_per_element() {
+    let Some(ctx) = test_context("gpu_refuses_a_degree_per_element") else {
+        return;
+    };
+    let gpu = GpuBackend::new(ctx, Precision::Auto).unwrap();
+    let mixed = radcol_core::assembly::conformance::mixed_degree_cases();
+    let (name, p) = &mixed[0];
+    let err = gpu.assemble(p).unwrap_err().to_string();
+    assert!(
+        err.contains("degree per element") && err.contains("CPU backend"),
+        "{name}: {err}"
+    );
+}
