@@ -238,12 +238,18 @@ mod tests {
     #[test]
     fn cpu_backend_matches_the_generic_path() {
         for (name, p) in conformance_cases() {
-            let fast = CpuBackend.assemble(&p).unwrap().matrix;
-            let slow = generic_matrix(&p);
-            let d = compare_matrices(&fast, &slow, 1e-13, 1e-3)
-                .unwrap_or_else(|e| panic!("{name}: {e}"));
-            assert!(d.floored_rel <= 1e-13, "{name}: {d:?}");
+            matches_the_generic_path(&name, &p);
         }
+    }
+
+    /// The CPU backend's matrix of `p`, checked against [`generic_matrix`].
+    fn matches_the_generic_path(name: &str, p: &AssemblyPlan) -> DenseMatrix {
+        let fast = CpuBackend.assemble(p).unwrap().matrix;
+        let slow = generic_matrix(p);
+        let d =
+            compare_matrices(&fast, &slow, 1e-13, 1e-3).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(d.floored_rel <= 1e-13, "{name}: {d:?}");
+        fast
     }
 
     /// With a degree per element, the backend's runs (one node set each)
@@ -253,11 +259,7 @@ mod tests {
     #[test]
     fn a_degree_per_element_matches_each_degree_alone() {
         for (name, p) in mixed_degree_cases() {
-            let fast = CpuBackend.assemble(&p).unwrap().matrix;
-            let slow = generic_matrix(&p);
-            let d = compare_matrices(&fast, &slow, 1e-13, 1e-3)
-                .unwrap_or_else(|e| panic!("{name}: {e}"));
-            assert!(d.floored_rel <= 1e-13, "{name}: {d:?}");
+            let fast = matches_the_generic_path(&name, &p);
             let disc = p.discretization();
             for r in 0..=3 {
                 let one = Arc::new(Discretization::new(
