@@ -164,11 +164,6 @@ impl Discretization {
         self.sets.iter().map(NodeSet::degree).max().unwrap_or(0)
     }
 
-    /// Per element, its degree.
-    pub fn degrees(&self) -> Vec<usize> {
-        (0..self.mesh.len()).map(|k| self.degree(k)).collect()
-    }
-
     /// The unknowns (and collocation points) of element `k`.
     #[inline]
     pub fn range(&self, k: usize) -> Range<usize> {
@@ -243,16 +238,6 @@ impl Discretization {
     /// True when there is no unknown.
     pub fn is_empty(&self) -> bool {
         self.points.is_empty()
-    }
-
-    /// Whether `other` has the same node set as this one on every element
-    /// (the same degree and α), so that their unknowns correspond.
-    pub fn same_nodes(&self, other: &Discretization) -> bool {
-        self.mesh.len() == other.mesh.len()
-            && (0..self.mesh.len()).all(|k| {
-                let (a, b) = (self.nodes_of(k), other.nodes_of(k));
-                a.degree() == b.degree() && a.alpha() == b.alpha()
-            })
     }
 }
 
