@@ -3,6 +3,7 @@
 //! Pure formatting: every number comes from core.
 
 mod adapt;
+mod channel;
 mod compare;
 mod info;
 mod nodes;

@@ -1,6 +1,7 @@
 //! `radcol solve`: mesh, problem, visibility, backend, assembly, timings and
 //! per-channel results.
 
+use super::channel::{fmt_estimate, fmt_limited};
 use super::operator::{self, OperatorReport};
 use super::{alpha_text, precise, sci, secs, AdaptReport, ProblemText};
 use crate::setup::Setup;
@@ -313,63 +314,11 @@ impl SolveReport {
                 fmt_estimate(f, e, ch.effectivity)?;
             }
             if let Some(l) = &ch.limited {
-                let scale = ch.estimate.as_ref().map(|e| e.scale);
-                let shown = ch
-                    .estimate_shown
-                    .map(|m| format!("; estimated error of what is shown: max {}", sci(m)))
-                    .unwrap_or_default();
-                writeln!(
-                    f,
-                    "              limited: {} element{} scaled towards {} mean{} to show no u < 0 ({} set to 0); largest change {}{}{shown} (--keep-negative shows u_n as computed)",
-                    l.elements,
-                    if l.elements == 1 { "" } else { "s" },
-                    if l.elements == 1 { "its" } else { "their" },
-                    if l.elements == 1 { "" } else { "s" },
-                    l.zeroed,
-                    sci(l.max_change),
-                    scale
-                        .filter(|&s| s > 0.0)
-                        .map(|s| format!(" = {} of max|u|", sci(l.max_change / s)))
-                        .unwrap_or_default()
-                )?;
+                fmt_limited(f, l, ch.estimate.as_ref(), ch.estimate_shown)?;
             }
         }
         Ok(())
     }
-}
-
-/// The estimate's line(s) of one channel.
-fn fmt_estimate(f: &mut fmt::Formatter<'_>, e: &ErrorEstimate, eff: Option<f64>) -> fmt::Result {
-    let updated = |b: f64| {
-        let rel = sci(b / e.scale.max(f64::MIN_POSITIVE));
-        format!("; updated from the previous step's, within {rel} of max|u| of the computed one")
-    };
-    writeln!(
-        f,
-        "              estimated error: max {} of max|u| = {}, rms {}{}{}",
-        sci(e.max_rel),
-        sci(e.scale),
-        sci(e.rms_rel),
-        eff.map(|x| format!(" (estimate / true global max = {x:.2})"))
-            .unwrap_or_default(),
-        e.updated_within.map(updated).unwrap_or_default()
-    )?;
-    let negative = e.negative_nodes + e.negative_points;
-    if negative > 0 {
-        writeln!(
-            f,
-            "              negative u_n at {} nodes and {} lattice points (min {}){}",
-            e.negative_nodes,
-            e.negative_points,
-            sci(e.min_value),
-            if e.nonnegative_problem {
-                ": unphysical (E, ρ ≥ 0), counted as error"
-            } else {
-                ""
-            }
-        )?;
-    }
-    Ok(())
 }
 
 /// The trust warnings of `out`, and --grade's when it found nothing to grade
