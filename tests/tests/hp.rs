@@ -306,7 +306,7 @@ fn the_loop_ends_near_the_cheapest_mesh_of_its_degree() {
         let best = *cost.fixed.iter().min().expect("degrees");
         let gain = best as f64 / cost.hp as f64;
         for r in 2..=3 {
-            let (unknowns, true_error, _) = adaptive(&case, r, tol);
+            let (unknowns, true_error, _) = adaptive(&case, r, tol, false);
             let ratio = unknowns as f64 / cost.fixed[r - 1] as f64;
             println!(
                 "{} r = {r}: loop {unknowns} unknowns ({ratio:.2}x the cheapest), true {true_error:.3e}; degree per element {gain:.2}x fewer than one",
@@ -318,6 +318,38 @@ fn the_loop_ends_near_the_cheapest_mesh_of_its_degree() {
         assert!(gain >= 1.3, "{}: {gain:.2}", case.name);
     }
 }
+
+/// The loop with a degree per element (`AdaptOptions::hp`) from r = 2:
+/// the true max error, sampled on every element's lattice (vertices, edges,
+/// interior), is within the target, with fewer unknowns than the loop at
+/// one degree, and no fewer than the cheapest mesh with a degree per
+/// element (which would mean the error is measured wrong).
+#[test]
+fn a_degree_per_element_reaches_the_target_with_fewer_unknowns() {
+    let sets = node_sets();
+    let tol = 1e-3;
+    for case in cases() {
+        let (one, _, _) = adaptive(&case, 2, tol, false);
+        let (hp, true_error, _) = adaptive(&case, 2, tol, true);
+        let cheapest = cheapest_floor(&case, &sets, tol).hp;
+        println!(
+            "{}: hp {hp} unknowns (true {true_error:.3e}), one degree {one} ({:.2}x), cheapest {cheapest}",
+            case.name,
+            one as f64 / hp as f64
+        );
+        assert!(true_error <= tol, "{}: {true_error:.3e}", case.name);
+        assert!(
+            hp as f64 * GAIN <= one as f64,
+            "{}: {hp} against {one}",
+            case.name
+        );
+        assert!(hp >= cheapest, "{}: {hp} below {cheapest}", case.name);
+    }
+}
+
+/// The least gain (unknowns at one degree over unknowns with hp) the test
+/// above accepts.
+const GAIN: f64 = 1.1;
 
 /// The study: for TOL = 1e-2, 1e-3, 1e-4, the unknowns on the floor of the
 /// cheapest mesh within TOL with one degree r = 1..=4 everywhere and with a
@@ -349,7 +381,7 @@ fn study() {
         }
         for tol in [1e-2, 1e-3] {
             for r in 1..=3 {
-                let (unknowns, true_error, seconds) = adaptive(&case, r, tol);
+                let (unknowns, true_error, seconds) = adaptive(&case, r, tol, false);
                 println!(
                     "{} tol {tol:.0e}: adaptive loop, r = {r}: {unknowns} unknowns, true {true_error:.3e}, {seconds:.1} s",
                     case.name
@@ -359,9 +391,10 @@ fn study() {
     }
 }
 
-/// The adaptive loop's last step from level 1 at degree `r` to `tol`:
-/// (unknowns, true max error / max u, wall seconds).
-fn adaptive(case: &Case, r: usize, tol: f64) -> (usize, f64, f64) {
+/// The adaptive loop's last step from level 1 at degree `r` to `tol`, with
+/// a degree per element when `hp`: (unknowns, true max error / max u, wall
+/// seconds).
+fn adaptive(case: &Case, r: usize, tol: f64, hp: bool) -> (usize, f64, f64) {
     let surface = Arc::new(floor_under_occluder(&case.emitter, &case.occluder));
     let cfg = SolveConfig {
         degree: r,
@@ -371,6 +404,7 @@ fn adaptive(case: &Case, r: usize, tol: f64) -> (usize, f64, f64) {
     };
     let opts = AdaptOptions {
         target: tol,
+        hp,
         ..Default::default()
     };
     let t = std::time::Instant::now();

@@ -161,6 +161,70 @@ fn updated_plans_and_reused_entries_equal_fresh_ones() {
     on_both(check, 0, 1);
 }
 
+/// A degree per element (the adaptive loop with hp): steps that raise
+/// some elements one degree and split others, lowering their children's,
+/// reuse the entries of the pairs of unchanged elements bit for bit (a
+/// raised element counts as changed; the unchanged ones keep their set).
+#[test]
+fn raised_and_lowered_elements_reuse_like_split_ones() {
+    on_both(check_raise, 0, 1);
+}
+
+fn check_raise(surface: Arc<Surface>, level: u32, degree: usize, what: &str) {
+    let (vis, quad, _, mut mesh) = start(surface, level, degree);
+    let sets: Vec<NodeSet> = (0..=3).map(|r| NodeSet::new(r, 0.1).unwrap()).collect();
+    let mut degrees = vec![degree; mesh.len()];
+    let disc = Discretization::with_degrees(mesh.clone(), sets.clone(), &degrees).unwrap();
+    let mut plan = AssemblyPlan::new(Arc::new(disc), quad.clone(), &vis);
+    let mut matrix = CpuBackend.assemble(&plan).unwrap().matrix;
+    for step in 0..2 {
+        // Every third element raised, every fifth split with its children
+        // one degree lower (at least 1), from a shifting start.
+        let n = mesh.len();
+        let raise = |k: usize| (k + step) % 3 == 0 && degrees[k] < 3;
+        let split: Vec<usize> = (0..n)
+            .filter(|&k| (k + step) % 5 == 1 && !raise(k))
+            .collect();
+        let (refined, parents) = refine(&mesh, &split);
+        let changed: Vec<bool> = (0..n).map(|k| raise(k) || split.contains(&k)).collect();
+        let next: Vec<usize> = parents
+            .iter()
+            .map(|&p| match (raise(p), split.contains(&p)) {
+                (true, _) => degrees[p] + 1,
+                (_, true) => degrees[p].saturating_sub(1).max(1),
+                _ => degrees[p],
+            })
+            .collect();
+        let refined = Arc::new(refined);
+        let disc =
+            Arc::new(Discretization::with_degrees(refined.clone(), sets.clone(), &next).unwrap());
+        let unchanged = Arc::new(Unchanged::refined(&parents, &changed));
+        let updated =
+            AssemblyPlan::updating(disc.clone(), quad.clone(), &vis, None, &plan, unchanged);
+        let fresh = AssemblyPlan::new(disc, quad.clone(), &vis);
+        assert!(
+            updated.unchanged().is_some(),
+            "{what} step {step}: nothing reused"
+        );
+        assert_eq!(
+            updated.classes(),
+            fresh.classes(),
+            "{what} step {step}: classes"
+        );
+        let reused = CpuBackend.assemble_reusing(&updated, &matrix).unwrap();
+        let full = CpuBackend.assemble(&fresh).unwrap();
+        assert!(
+            reused.matrix.as_slice() == full.matrix.as_slice(),
+            "{what} step {step}: reused entries differ"
+        );
+        assert!(
+            reused.kernel_evals < full.kernel_evals,
+            "{what} step {step}"
+        );
+        (mesh, degrees, plan, matrix) = (refined, next, updated, reused.matrix);
+    }
+}
+
 /// `check` on the Cornell box at r = 1 (mesh level `cornell`) and on the
 /// unit sphere at r = 2 (level `sphere`).
 fn on_both(check: fn(Arc<Surface>, u32, usize, &str), cornell: u32, sphere_level: u32) {

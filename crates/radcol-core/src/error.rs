@@ -146,6 +146,13 @@ pub enum InputError {
         /// The floor asked for.
         value: f64,
     },
+    /// A degree per element asked for with a backend that takes one node
+    /// set per assembly.
+    #[error("a degree per element (hp) needs the CPU backend: the {backend} backend's far-field shader takes one node set per assembly; use --backend cpu, or leave out --hp")]
+    HpBackend {
+        /// The backend asked for.
+        backend: String,
+    },
     /// A compression tolerance outside (0, 1).
     #[error("compression tolerance {value} must lie in (0, 1): it is the relative error of each compressed block (Frobenius)")]
     CompressionTolerance {

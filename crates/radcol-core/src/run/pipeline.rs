@@ -298,15 +298,19 @@ pub fn solve_on_mesh(
     backend: &dyn AssemblyBackend,
     guess: Option<&[Vec<f64>]>,
 ) -> Result<SolveOutcome, Error> {
-    Ok(solve_step(problem, cfg, mesh, backend, guess, None)?.0)
+    Ok(solve_step(problem, cfg, (mesh, None), backend, guess, None)?.0)
 }
+
+/// A degree per element: the node sets to choose from, and each element's
+/// degree (a set of that degree must be among them).
+pub(crate) type PerElement<'a> = (&'a [NodeSet], &'a [usize]);
 
 /// [`solve_on_mesh`], reusing what `previous` has for the pairs of unchanged
 /// elements, and returning the plans for the next step.
 pub(crate) fn solve_step(
     problem: &Problem,
     cfg: &SolveConfig,
-    mesh: Arc<Mesh>,
+    (mesh, degrees): (Arc<Mesh>, Option<PerElement<'_>>),
     backend: &dyn AssemblyBackend,
     guess: Option<&[Vec<f64>]>,
     previous: Option<&Previous<'_>>,
@@ -315,10 +319,12 @@ pub(crate) fn solve_step(
     check_quadrature(cfg)?;
     let visibility = visibility::analyze(&problem.surface);
     visibility.check_supported()?;
-    let nodes = NodeSet::new(cfg.degree, cfg.alpha)?;
-    let unknowns = (mesh.len() * nodes.len()) as u64;
-    decide_now(cfg, unknowns, mesh.len() as u64)?;
-    let disc = Arc::new(Discretization::new(mesh, nodes));
+    let disc = match degrees {
+        None => Discretization::new(mesh, NodeSet::new(cfg.degree, cfg.alpha)?),
+        Some((sets, degrees)) => Discretization::with_degrees(mesh, sets.to_vec(), degrees)?,
+    };
+    decide_now(cfg, disc.len() as u64, disc.mesh().len() as u64)?;
+    let disc = Arc::new(disc);
     let stages = Stages {
         problem,
         cfg,

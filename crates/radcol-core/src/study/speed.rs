@@ -194,6 +194,7 @@ mod tests {
             estimate_updated_within: None,
             timings: Default::default(),
             operator: crate::run::OperatorKind::Dense,
+            degrees: vec![0, 10],
         };
         let s = adaptive_settings(2, &[step(1e-2, None, 1.0), step(1e-3, Some(2e-3), 2.5)]);
         assert_eq!(s[1].refinement, Refinement::Adaptive { step: 2 });

@@ -16,15 +16,23 @@ use crate::run::SolveConfig;
 /// refusal still ends the loop with the previous step's answer.)
 const STEP_MEMORY_FRACTION: f64 = 0.8;
 
-/// How many of the `marked` elements may be split (each adds 3 elements of
-/// `f` unknowns), or why none may.
+/// How many of the marked elements may be split, worst first, or why none
+/// may, on a mesh of `elements` elements and `unknowns` unknowns. Each
+/// marked element adds at most 3 elements and `growth[i]` unknowns (3 f_r
+/// for a split at its degree r; with a degree per element a split that
+/// lowers the degree or a raise adds fewer).
 pub(super) fn budget(
     opts: &AdaptOptions,
     cfg: &SolveConfig,
-    elements: usize,
-    f: usize,
-    marked: usize,
+    (elements, unknowns): (usize, usize),
+    growth: &[usize],
 ) -> Result<usize, StopReason> {
+    let marked = growth.len();
+    let mut after = Vec::with_capacity(marked + 1);
+    after.push(unknowns as u64);
+    for &g in growth {
+        after.push(after[after.len() - 1] + g as u64);
+    }
     let available = available_memory();
     let solver = match cfg.solver {
         crate::run::SolverKind::Gmres => 0.0,
@@ -37,18 +45,19 @@ pub(super) fn budget(
     // compressed operator leaves too little.
     let may_compress = cfg.solver == crate::run::SolverKind::Gmres
         && cfg.operator != crate::run::OperatorChoice::Dense;
-    let fits_memory = |n: u64| {
+    let fits_memory = |n: u64, elements: usize| {
         if may_compress {
-            let pairs = crate::assembly::pair_table_bytes(n as f64 / f as f64);
+            let pairs = crate::assembly::pair_table_bytes(elements as f64);
             return !cfg.check_memory
                 || available.is_none_or(|a| pairs <= STEP_MEMORY_FRACTION * a as f64);
         }
         let bytes = (1.0 + solver) * 8.0 * (n as f64).powi(2);
         !cfg.check_memory || available.is_none_or(|a| bytes <= STEP_MEMORY_FRACTION * a as f64)
     };
-    let unknowns = |split: usize| ((elements + 3 * split) * f) as u64;
+    let unknowns = |split: usize| after[split];
     let allowed = |split: usize| {
-        opts.max_unknowns.is_none_or(|m| unknowns(split) <= m) && fits_memory(unknowns(split))
+        opts.max_unknowns.is_none_or(|m| unknowns(split) <= m)
+            && fits_memory(unknowns(split), elements + 3 * split)
     };
     if marked == 0 || allowed(marked) {
         return Ok(marked);

@@ -97,6 +97,15 @@ impl History {
     }
 }
 
+impl History {
+    /// Element `k` starts afresh: its degree was lowered, so its estimate
+    /// is not comparable with its ancestors'.
+    pub fn forget(&mut self, k: usize) {
+        let d = self.depth;
+        self.ancestors[k * d..(k + 1) * d].fill(f64::NAN);
+    }
+}
+
 /// A neighbourhood where refinement stopped reducing the error.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SingularPoint {

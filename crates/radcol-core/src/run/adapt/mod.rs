@@ -16,10 +16,14 @@
 //! is updated from the previous step's where u_n changed little away from
 //! the new elements ([`crate::estimate::estimate_updated`]). Elements whose
 //! estimate stops falling under refinement are no longer split
-//! (`history.rs`); the loop then names where they are.
+//! (`history.rs`); the loop then names where they are. With
+//! [`AdaptOptions::hp`] a marked element may instead be raised one degree,
+//! or split with its children one degree lower (`hp.rs`).
 
 mod budget;
 mod history;
+pub mod hp;
+mod next;
 mod options;
 
 pub use history::{singular_points, SingularPoint, STALL_RATIO};
@@ -31,12 +35,13 @@ use super::pipeline::{solve_step, Plans, Previous};
 use super::{discretize, OperatorKind, SolveConfig, SolveOutcome, Timings};
 use crate::assembly::{AssemblyBackend, Unchanged};
 use crate::error::Error;
-use crate::geometry::barycentric_st;
 use crate::mesh::Mesh;
 use crate::problem::Problem;
-use crate::solution::Solution;
 use budget::budget;
 use history::History;
+use hp::Degrees;
+use next::{advance, transfer, Next};
+pub use next::{on_refined, on_refined_at, refine};
 use serde::Serialize;
 use std::sync::Arc;
 use std::time::Instant;
@@ -113,6 +118,8 @@ pub struct AdaptStep {
     pub timings: Timings,
     /// Dense or compressed geometric operator.
     pub operator: OperatorKind,
+    /// How many elements have each degree (index: the degree).
+    pub degrees: Vec<usize>,
 }
 
 /// The last solve and how the loop got there.
@@ -140,12 +147,21 @@ pub fn solve_adaptive(
     mut on_step: impl FnMut(&AdaptStep),
 ) -> Result<AdaptOutcome, Error> {
     opts.check()?;
+    let info = backend.info();
+    if opts.hp && info.kind != crate::backend::BackendKind::Cpu {
+        let backend = info.kind.to_string();
+        return Err(crate::error::InputError::HpBackend { backend }.into());
+    }
     let cfg = SolveConfig {
         estimate: true,
         ..cfg.clone()
     };
     let mut mesh = discretize(problem, &cfg)?.mesh().clone();
-    let f = crate::nodes::nodes_per_element(cfg.degree);
+    // With hp, every element's degree and how it came to be.
+    let mut degrees = opts
+        .hp
+        .then(|| Degrees::new(&cfg, mesh.len()))
+        .transpose()?;
     let mut guess: Option<Vec<Vec<f64>>> = None;
     let mut history = History::new(mesh.len(), opts.stall_generations as usize);
     let floor = opts.min_size * diagonal(&mesh);
@@ -169,7 +185,10 @@ pub fn solve_adaptive(
         let result = solve_step(
             problem,
             &cfg,
-            mesh.clone(),
+            (
+                mesh.clone(),
+                degrees.as_ref().map(|d| (d.sets(), d.degrees())),
+            ),
             backend,
             guess.as_deref(),
             prev.as_ref(),
@@ -206,7 +225,12 @@ pub fn solve_adaptive(
             stalling: &|k| stalls[k] > 0 && stalls[k] + 1 >= opts.stall_generations,
         };
         let shown = step.estimate_shown;
-        let (stop, marked, split) = decide(opts, &cfg, shown, steps.len() + 1, &marking, f);
+        let disc = &out.discretization;
+        // Splitting element k adds at most 3 f_{r_k} unknowns (a raise or a
+        // lowering adds fewer).
+        let grows = |k: usize| 3 * disc.nodes_per(k);
+        let size: (_, _, &dyn Fn(usize) -> usize) = (mesh.len(), disc.len(), &grows);
+        let (stop, marked, split) = decide(opts, &cfg, (shown, steps.len() + 1), &marking, size);
         step.split = split;
         on_step(&step);
         steps.push(step);
@@ -222,11 +246,22 @@ pub fn solve_adaptive(
                 singular,
             });
         }
-        let (refined, parents) = refine(&mesh, &marked[..split]);
-        guess = Some(transfer(&out, &refined, &parents));
-        let split_mark = marks(mesh.len(), &marked[..split]);
-        history = history.refined(&parents, &split_mark, &indicator);
-        let unchanged = Arc::new(Unchanged::refined(&parents, &split_mark));
+        let marked = &marked[..split];
+        let next = advance(&out, marked, (&indicator, &negative), degrees.as_ref());
+        guess = Some(transfer(&out, &next.mesh, &next.parents, &|k| {
+            next.nodes(k, &out)
+        }));
+        history = history.refined(&next.parents, &next.changed, &indicator);
+        for &k in &next.lowered {
+            history.forget(k);
+        }
+        let unchanged = Arc::new(Unchanged::refined(&next.parents, &next.changed));
+        let Next {
+            mesh: refined,
+            degrees: next_degrees,
+            ..
+        } = next;
+        degrees = next_degrees;
         previous = Some((out, plans, unchanged));
         pending_singular = singular;
         mesh = Arc::new(refined);
@@ -243,15 +278,6 @@ fn diagonal(mesh: &Mesh) -> f64 {
 fn longest_edge(mesh: &Mesh, k: usize) -> f64 {
     let [a, b, c] = mesh.vertices(k);
     (b - a).length().max((c - b).length()).max((a - c).length())
-}
-
-/// `n` flags, set at `split`.
-fn marks(n: usize, split: &[usize]) -> Vec<bool> {
-    let mut m = vec![false; n];
-    for &k in split {
-        m[k] = true;
-    }
-    m
 }
 
 /// What marking knows of each element: its `indicator`, whether it is
@@ -275,13 +301,14 @@ struct Marking<'a> {
 /// against 11 now, to the same mesh). Setting aside every element whose
 /// last split stalled went too far: the shadow family's square occluder
 /// took 18 117 unknowns to 1e-3 instead of 12 339.
+/// `size`: the mesh's elements and unknowns, and how many unknowns
+/// splitting element k adds at most.
 fn decide(
     opts: &AdaptOptions,
     cfg: &SolveConfig,
-    estimate: f64,
-    step: usize,
+    (estimate, step): (f64, usize),
     m: &Marking<'_>,
-    f: usize,
+    size: (usize, usize, &dyn Fn(usize) -> usize),
 ) -> (Option<StopReason>, Vec<usize>, usize) {
     let stop = if estimate <= opts.target {
         Some(StopReason::Reached)
@@ -303,7 +330,9 @@ fn decide(
         }
     };
     let stop = stop.or((marked.is_empty()).then_some(StopReason::Singular));
-    let budget = budget(opts, cfg, m.indicator.len(), f, marked.len());
+    let (elements, unknowns, grows) = size;
+    let growth: Vec<usize> = marked.iter().map(|&k| grows(k)).collect();
+    let budget = budget(opts, cfg, (elements, unknowns), &growth);
     let stop = stop.or(budget.err());
     let split = budget.map_or(0, |n| n.min(marked.len()));
     (stop, marked, split)
@@ -345,7 +374,17 @@ fn describe(
             .reduce(f64::max),
         timings: out.timings,
         operator: out.operator.kind(),
+        degrees: degree_counts(&out.discretization),
     }
+}
+
+/// How many elements of `disc` have each degree (index: the degree).
+fn degree_counts(disc: &crate::discretization::Discretization) -> Vec<usize> {
+    let mut counts = vec![0; disc.max_degree() + 1];
+    for k in 0..disc.mesh().len() {
+        counts[disc.degree(k)] += 1;
+    }
+    counts
 }
 
 /// Per element, the worst channel's estimate relative to its max |u_n|, and
@@ -394,53 +433,6 @@ fn mark(indicator: &[f64], threshold: f64, frozen: &dyn Fn(usize) -> bool) -> Ve
         .collect();
     marked.sort_by(|&a, &b| indicator[b].total_cmp(&indicator[a]));
     marked
-}
-
-/// `mesh` with the elements `split` replaced in place by their four
-/// children, and each new element's parent in `mesh`.
-pub fn refine(mesh: &Mesh, split: &[usize]) -> (Mesh, Vec<usize>) {
-    let mut marked = vec![false; mesh.len()];
-    for &k in split {
-        marked[k] = true;
-    }
-    let mut elements = Vec::with_capacity(mesh.len() + 3 * split.len());
-    let mut parents = Vec::with_capacity(elements.capacity());
-    for (k, e) in mesh.elements().iter().enumerate() {
-        if marked[k] {
-            elements.extend(e.children());
-            parents.extend([k; 4]);
-        } else {
-            elements.push(*e);
-            parents.push(k);
-        }
-    }
-    let refined = Mesh::from_elements(mesh.surface().clone(), mesh.level(), elements);
-    (refined, parents)
-}
-
-/// The previous solution of every channel at the nodes of `refined`.
-fn transfer(out: &SolveOutcome, refined: &Mesh, parents: &[usize]) -> Vec<Vec<f64>> {
-    out.channels
-        .iter()
-        .map(|ch| on_refined(&ch.solution, refined, parents))
-        .collect()
-}
-
-/// `solution` at the nodes of `refined` (a mesh [`refine`] made from its
-/// mesh, each element's `parents` element): on each element, its parent's
-/// polynomial at the nodes of its parent's node set.
-pub fn on_refined(solution: &Solution, refined: &Mesh, parents: &[usize]) -> Vec<f64> {
-    let disc = solution.discretization();
-    let old = disc.mesh();
-    let mut at = Vec::with_capacity(refined.len() * disc.max_nodes_per_element());
-    for (k, e) in refined.elements().iter().enumerate() {
-        let [a, b, c] = old.elements()[parents[k]].param;
-        for &[s, t] in disc.nodes_of(parents[k]).points() {
-            let [s, t] = barycentric_st(a, b, c, e.param_point(s, t)).unwrap_or([s, t]);
-            at.push(solution.eval(parents[k], s, t));
-        }
-    }
-    at
 }
 
 #[cfg(test)]

@@ -47,6 +47,12 @@ pub struct AdaptOptions {
     /// then within this fraction of the marking threshold
     /// (`mark_fraction · target`) of the computed one (0: computed always).
     pub estimate_within: f64,
+    /// A degree per element ([`super::hp`]): a marked element is split,
+    /// split with its children one degree lower, or raised one degree, by
+    /// how its estimate fell when it last changed. Off: every element keeps
+    /// the configured degree. CPU backend only (the GPU far field takes one
+    /// node set).
+    pub hp: bool,
 }
 
 /// The default [`AdaptOptions::mark_fraction`]. At 0.5, with an estimate
@@ -83,6 +89,7 @@ impl Default for AdaptOptions {
             min_size: MIN_SIZE,
             stall_generations: STALL_GENERATIONS,
             estimate_within: ESTIMATE_WITHIN,
+            hp: false,
         }
     }
 }

@@ -49,7 +49,14 @@ fn a_stalling_element_does_not_set_the_threshold_alone() {
             frozen,
             stalling,
         };
-        decide(&opts, &cfg, 8e-3, 1, &m, 3).1
+        decide(
+            &opts,
+            &cfg,
+            (8e-3, 1),
+            &m,
+            (ind.len(), 3 * ind.len(), &|_| 9),
+        )
+        .1
     };
     // Element 0 stalls: the threshold is 1/4 of element 5's 2e-3 (5e-4),
     // and element 0 is split with element 5.
@@ -100,7 +107,18 @@ fn budget_caps_the_split() {
         max_unknowns: Some(3 * (10 + 3 * 4)),
         ..Default::default()
     };
-    assert_eq!(budget(&opts, &cfg, 10, 3, 2), Ok(2));
-    assert_eq!(budget(&opts, &cfg, 10, 3, 9), Ok(4));
-    assert_eq!(budget(&opts, &cfg, 22, 3, 9), Err(StopReason::MaxUnknowns));
+    let split = |elements: usize, marked: usize| {
+        budget(&opts, &cfg, (elements, 3 * elements), &vec![9; marked])
+    };
+    assert_eq!(split(10, 2), Ok(2));
+    assert_eq!(split(10, 9), Ok(4));
+    assert_eq!(split(22, 9), Err(StopReason::MaxUnknowns));
+    // A degree per element: each marked element adds what it may.
+    let growth = [18, 3, 3, 3, 9];
+    assert_eq!(budget(&opts, &cfg, (10, 30), &growth), Ok(5));
+    assert_eq!(budget(&opts, &cfg, (10, 40), &growth), Ok(3));
+    assert_eq!(
+        budget(&opts, &cfg, (10, 49), &growth),
+        Err(StopReason::MaxUnknowns)
+    );
 }
