@@ -826,6 +826,42 @@ fn the_target_holds_for_what_is_shown() {
     }
 }
 
+/// `--hp` gives elements their own degrees: the steps report how many
+/// elements have each, more than one degree is in use at the end, the
+/// unknowns add up (f_r per element), and the stop is what the estimate
+/// says. With `--backend auto` the run assembles on the CPU.
+#[test]
+fn hp_steps_report_their_degrees() {
+    let target = 1e-2;
+    let v = stdout_json(&radcol(&[
+        "solve",
+        "shadow",
+        "--target-error",
+        "1e-2",
+        "--hp",
+        "--json",
+    ]));
+    let ad = &v["adaptive"];
+    let last = ad["steps"].as_array().unwrap().last().unwrap().clone();
+    let degrees: Vec<u64> = last["degrees"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d.as_u64().unwrap())
+        .collect();
+    assert!(degrees.iter().filter(|&&n| n > 0).count() > 1, "{last}");
+    let elements: u64 = degrees.iter().sum();
+    assert_eq!(elements, last["elements"].as_u64().unwrap(), "{last}");
+    let unknowns: u64 = (0u64..)
+        .zip(&degrees)
+        .map(|(r, n)| n * (r + 1) * (r + 2) / 2)
+        .sum();
+    assert_eq!(unknowns, last["unknowns"].as_u64().unwrap(), "{last}");
+    assert_eq!(ad["stop"], "reached", "{ad}");
+    assert!(num(&last, "estimate_shown") <= target, "{last}");
+    assert_eq!(v["backend"]["kind"], "cpu", "{}", v["backend"]);
+}
+
 /// (position, normal, radiosity per channel) of every vertex of a radcol PLY.
 fn read_ply(path: &str) -> Vec<([f64; 3], [f64; 3], Vec<f64>)> {
     use ply_rs_bw::parser::Parser;

@@ -393,6 +393,37 @@ fn magnitude_cases() -> Vec<Case> {
 fn flag_cases() -> Vec<Case> {
     vec![
         case(
+            "--hp --backend gpu",
+            &[
+                "solve",
+                "shadow",
+                "--target-error",
+                "1e-2",
+                "--hp",
+                "--backend",
+                "gpu",
+            ],
+            Refused(2, &["--hp", "GPU", "--backend cpu"]),
+        ),
+        case(
+            "--hp --precision f32",
+            &[
+                "solve",
+                "shadow",
+                "--target-error",
+                "1e-2",
+                "--hp",
+                "--precision",
+                "f32",
+            ],
+            Refused(2, &["--hp", "f64", "--precision f32"]),
+        ),
+        case(
+            "--hp without --target-error",
+            &["solve", "shadow", "--hp"],
+            Refused(2, &["--target-error"]),
+        ),
+        case(
             "--compression-tol 0",
             &[
                 "solve",

@@ -63,6 +63,13 @@ pub struct SolveArgs {
     )]
     pub max_steps: Option<usize>,
 
+    /// With --target-error: a degree per element (hp). A marked element is raised one
+    /// degree where its error fell as for a smooth u when it last changed, and split with
+    /// its children one degree lower where it fell as at a shadow or contact line (degrees
+    /// 1..=4; fewer unknowns and less memory; faster at tight targets). CPU backend.
+    #[arg(help_heading = "Accuracy", long, requires = "target_error")]
+    pub hp: bool,
+
     /// With --target-error: fail (exit 1, outputs still written) when the target is not
     /// reached within the budget (a stop where only the neighbourhoods of the singular
     /// points the report names are above it counts as reached).

@@ -106,6 +106,10 @@ pub struct SolveReport {
     /// --grade: exponent, zone and the lines graded towards.
     grading: Option<GradeReport>,
     elements: usize,
+    /// With a degree per element (`--hp`): how many elements have each
+    /// degree (index: the degree).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    degrees: Option<Vec<usize>>,
     unknowns: usize,
     h: f64,
     shape_ratio: Range,
@@ -159,6 +163,11 @@ impl SolveReport {
             warnings: warnings(s, out, grading.as_ref()),
             grading,
             elements: disc.mesh().len(),
+            degrees: disc.uniform_nodes().is_none().then(|| {
+                let mut n = vec![0; disc.max_degree() + 1];
+                (0..disc.mesh().len()).for_each(|k| n[disc.degree(k)] += 1);
+                n
+            }),
             unknowns: disc.len(),
             h: out.h,
             shape_ratio: Range {
@@ -372,9 +381,14 @@ impl fmt::Display for SolveReport {
                 .map(|h| format!(", max edge {h:.6}"))
                 .unwrap_or_default()
         )?;
+        let by_degree = self.degrees.as_ref().map_or_else(String::new, |n| {
+            let used = n.iter().enumerate().filter(|(_, &n)| n > 0);
+            let text: Vec<String> = used.map(|(r, n)| format!("{n} of r = {r}")).collect();
+            format!(" ({})", text.join(", "))
+        });
         writeln!(
             f,
-            "  mesh        {} elements, {} unknowns, h = {:.6}, shape ratio {:.4} .. {:.4}",
+            "  mesh        {} elements{by_degree}, {} unknowns, h = {:.6}, shape ratio {:.4} .. {:.4}",
             self.elements, self.unknowns, self.h, self.shape_ratio.min, self.shape_ratio.max
         )?;
         if let Some(g) = &self.grading {

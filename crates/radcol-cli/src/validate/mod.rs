@@ -210,9 +210,13 @@ fn solve_job(a: SolveArgs) -> Result<SolveJob> {
         outputs.push(map);
     }
     let look = look(&a)?;
+    let mut problem = problem;
+    if a.hp {
+        problem.backend = hp_backend(problem.backend, problem.precision)?;
+    }
     let adapt = a
         .target_error
-        .map(|t| adapt(t, (a.max_unknowns, a.max_steps), &problem))
+        .map(|t| adapt(t, (a.max_unknowns, a.max_steps, a.hp), &problem))
         .transpose()?;
     if adapt.is_some() && !a.relight.is_empty() {
         return Err(bad_input(
@@ -237,10 +241,26 @@ fn solve_job(a: SolveArgs) -> Result<SolveJob> {
     })
 }
 
-/// `--target-error` and its budget (`--max-unknowns`, `--max-steps`).
+/// The backend of an hp run: the CPU (`--backend auto` picks it: the GPU
+/// far field takes one node set per assembly); `--backend gpu` and
+/// `--precision f32` are refused.
+fn hp_backend(backend: BackendArg, precision: PrecisionArg) -> Result<BackendArg, BadInput> {
+    match (backend, precision) {
+        (_, PrecisionArg::F32) => Err(bad_input(
+            "--hp assembles on the CPU, which computes in f64: leave out --precision f32 or --hp",
+        )),
+        (BackendArg::Gpu, _) => Err(bad_input(
+            "--hp gives each element its own degree, and the GPU backend's far-field shader takes one node set per assembly: use --backend cpu (or auto), or leave out --hp",
+        )),
+        _ => Ok(BackendArg::Cpu),
+    }
+}
+
+/// `--target-error` and its budget (`--max-unknowns`, `--max-steps`), and
+/// `--hp`.
 fn adapt(
     target: f64,
-    (max_unknowns, max_steps): (Option<u64>, Option<usize>),
+    (max_unknowns, max_steps, hp): (Option<u64>, Option<usize>, bool),
     p: &ProblemSpec,
 ) -> Result<AdaptOptions, BadInput> {
     if !(target > 0.0 && target < 1.0) {
@@ -264,6 +284,7 @@ fn adapt(
         target,
         max_unknowns,
         max_steps: max_steps.unwrap_or(default.max_steps),
+        hp,
         ..default
     })
 }

@@ -27,11 +27,12 @@
 //! Elements where u_n < 0 are never raised (a higher degree rings more at
 //! a contact line), nor beyond [`HP_MAX_DEGREE`].
 //!
-//! Measured (README, "A degree per element?"): the thresholds were swept
-//! on the shadowed floor and the Cornell box to 1e-3 (`2^{−r/2}` and 0.6
-//! lie in the flat part of both); the loop reaches the targets with 1.1–1.5×
-//! fewer unknowns than one degree, and in less wall time only at 1e-4,
-//! where the dense matrix's N² dominates the step.
+//! Measured (README, "`--hp`"): the thresholds were swept on the shadowed
+//! floor and the Cornell box to 1e-3 (2^{−r/2} and 0.6 lie in the flat
+//! part of both). The loop reaches the targets with 1.06–1.5× fewer
+//! unknowns than at one degree, but in less wall time only on the shadowed
+//! floor at 1e-4: its steps are more, and cost more per unknown (more
+//! elements of degree 1). So it is an option, not the default.
 
 use crate::alpha0::auto_alpha;
 use crate::error::Error;
