@@ -181,7 +181,7 @@ fn check_raise(surface: Arc<Surface>, level: u32, degree: usize, what: &str) {
         // Every third element raised, every fifth split with its children
         // one degree lower (at least 1), from a shifting start.
         let n = mesh.len();
-        let raise = |k: usize| (k + step) % 3 == 0 && degrees[k] < 3;
+        let raise = |k: usize| (k + step).is_multiple_of(3) && degrees[k] < 3;
         let split: Vec<usize> = (0..n)
             .filter(|&k| (k + step) % 5 == 1 && !raise(k))
             .collect();

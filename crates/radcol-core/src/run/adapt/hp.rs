@@ -127,7 +127,7 @@ pub struct Degrees {
 impl Degrees {
     /// `n` elements of `cfg`'s degree, on the starting mesh.
     pub fn new(cfg: &SolveConfig, n: usize) -> Result<Self, Error> {
-        let top = cfg.degree.max(HP_MAX_DEGREE).min(MAX_DEGREE);
+        let top = cfg.degree.clamp(HP_MAX_DEGREE, MAX_DEGREE);
         let sets = (0..=top)
             .map(|r| {
                 let alpha = if r == cfg.degree {
