@@ -263,60 +263,35 @@ mod tests {
     /// element is split first; never raised with u_n < 0 or beyond the cap.
     #[test]
     fn the_choice_follows_the_measured_fall() {
-        let never = || -> f64 { panic!("θ is asked for only on the starting mesh") };
-        // r = 2: the threshold is 1/2.
-        assert_eq!(
-            choose(2, 0.12, Lineage::Split(1.0), false, &never),
-            Change::Raise
-        );
-        assert_eq!(
-            choose(2, 0.55, Lineage::Split(1.0), false, &never),
-            Change::SplitLower
-        );
-        assert_eq!(
-            choose(2, 0.12, Lineage::Split(1.0), true, &never),
-            Change::Split
-        );
-        assert_eq!(
-            choose(1, 0.9, Lineage::Split(1.0), false, &never),
-            Change::Split
-        );
-        // r = 3: 2^{-3/2} = 0.354.
-        assert_eq!(
-            choose(3, 0.3, Lineage::Split(1.0), false, &never),
-            Change::Raise
-        );
-        assert_eq!(
-            choose(3, 0.4, Lineage::Split(1.0), false, &never),
-            Change::SplitLower
-        );
-        assert_eq!(
-            choose(HP_MAX_DEGREE, 0.01, Lineage::Split(1.0), false, &never),
-            Change::Split
-        );
-        assert_eq!(
-            choose(2, 0.5, Lineage::Raised(1.0), false, &never),
-            Change::Raise
-        );
-        assert_eq!(
-            choose(3, 0.7, Lineage::Raised(1.0), false, &never),
-            Change::SplitLower
-        );
-        assert_eq!(
-            choose(2, 0.01, Lineage::Lowered, false, &never),
-            Change::Split
-        );
-        assert_eq!(
-            choose(2, 1.0, Lineage::Start, false, &|| 0.5),
-            Change::Raise
-        );
-        assert_eq!(
-            choose(2, 1.0, Lineage::Start, false, &|| 0.7),
-            Change::SplitLower
-        );
-        assert_eq!(
-            choose(0, 1.0, Lineage::Start, false, &|| f64::INFINITY),
-            Change::Split
-        );
+        use Change::*;
+        use Lineage as L;
+        // (degree, estimate, lineage, u_n < 0, θ (NaN: must not be asked
+        // for), the choice).
+        let nan = f64::NAN;
+        let cases = [
+            // r = 2: a split must divide the estimate by 2^{2/2} = 2.
+            (2, 0.12, L::Split(1.0), false, nan, Raise),
+            (2, 0.55, L::Split(1.0), false, nan, SplitLower),
+            (2, 0.12, L::Split(1.0), true, nan, Split),
+            (1, 0.9, L::Split(1.0), false, nan, Split),
+            // r = 3: by 2^{3/2} = 2.83 (q ≤ 0.354).
+            (3, 0.3, L::Split(1.0), false, nan, Raise),
+            (3, 0.4, L::Split(1.0), false, nan, SplitLower),
+            (HP_MAX_DEGREE, 0.01, L::Split(1.0), false, nan, Split),
+            (2, 0.5, L::Raised(1.0), false, nan, Raise),
+            (3, 0.7, L::Raised(1.0), false, nan, SplitLower),
+            (2, 0.01, L::Lowered, false, nan, Split),
+            (2, 1.0, L::Start, false, 0.5, Raise),
+            (2, 1.0, L::Start, false, 0.7, SplitLower),
+            (0, 1.0, L::Start, false, f64::INFINITY, Split),
+        ];
+        for (r, estimate, lineage, negative, theta, want) in cases {
+            let theta = || {
+                assert!(!theta.is_nan(), "θ asked for after {lineage:?}");
+                theta
+            };
+            let got = choose(r, estimate, lineage, negative, &theta);
+            assert_eq!(got, want, "r = {r}, {estimate}, {lineage:?}, {negative}");
+        }
     }
 }

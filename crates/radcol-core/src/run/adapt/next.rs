@@ -68,7 +68,7 @@ impl Next {
 
 /// The step after `out`: the `marked` elements (`indicator` and where u_n
 /// is `negative` per element) split, or with hp split, split one degree
-/// lower or raised as [`hp::Degrees::choose`] decides.
+/// lower or raised as [`Degrees::choose`] decides.
 pub(super) fn advance(
     out: &SolveOutcome,
     marked: &[usize],
@@ -80,23 +80,13 @@ pub(super) fn advance(
         None => vec![Change::Split; marked.len()],
     };
     let mesh = out.discretization.mesh();
-    let split: Vec<usize> = marked
-        .iter()
-        .zip(&changes)
-        .filter(|(_, &c)| c != Change::Raise)
-        .map(|(&k, _)| k)
-        .collect();
-    let (refined, parents) = refine(mesh, &split);
+    let taking = |want: &dyn Fn(Change) -> bool| -> Vec<usize> {
+        let pairs = marked.iter().zip(&changes);
+        pairs.filter(|(_, &c)| want(c)).map(|(&k, _)| k).collect()
+    };
+    let (refined, parents) = refine(mesh, &taking(&|c| c != Change::Raise));
     let changed = marks(mesh.len(), marked);
-    let lower = marks(
-        mesh.len(),
-        &marked
-            .iter()
-            .zip(&changes)
-            .filter(|(_, &c)| c == Change::SplitLower)
-            .map(|(&k, _)| k)
-            .collect::<Vec<_>>(),
-    );
+    let lower = marks(mesh.len(), &taking(&|c| c == Change::SplitLower));
     let lowered = (0..parents.len()).filter(|&k| lower[parents[k]]).collect();
     let degrees = degrees.map(|d| d.follow(marked, &changes, indicator, &parents));
     Next {
