@@ -164,6 +164,16 @@ impl Discretization {
         self.sets.iter().map(NodeSet::degree).max().unwrap_or(0)
     }
 
+    /// How many elements have each degree (index: the degree, up to
+    /// [`Self::max_degree`]).
+    pub fn elements_per_degree(&self) -> Vec<usize> {
+        let mut counts = vec![0; self.max_degree() + 1];
+        for k in 0..self.mesh.len() {
+            counts[self.degree(k)] += 1;
+        }
+        counts
+    }
+
     /// The unknowns (and collocation points) of element `k`.
     #[inline]
     pub fn range(&self, k: usize) -> Range<usize> {

@@ -163,11 +163,7 @@ impl SolveReport {
             warnings: warnings(s, out, grading.as_ref()),
             grading,
             elements: disc.mesh().len(),
-            degrees: disc.uniform_nodes().is_none().then(|| {
-                let mut n = vec![0; disc.max_degree() + 1];
-                (0..disc.mesh().len()).for_each(|k| n[disc.degree(k)] += 1);
-                n
-            }),
+            degrees: degrees_by_element(disc),
             unknowns: disc.len(),
             h: out.h,
             shape_ratio: Range {
@@ -366,6 +362,13 @@ impl GradeReport {
             "--grade: the scene has no concave edge or contact line between flat faces, so the mesh is not graded".into()
         })
     }
+}
+
+/// With a degree per element (`--hp`), how many elements have each degree.
+fn degrees_by_element(disc: &radcol_core::discretization::Discretization) -> Option<Vec<usize>> {
+    disc.uniform_nodes()
+        .is_none()
+        .then(|| disc.elements_per_degree())
 }
 
 impl fmt::Display for SolveReport {

@@ -35,6 +35,7 @@
 //! elements of degree 1). So it is an option, not the default.
 
 use crate::alpha0::auto_alpha;
+use crate::assembly::AssemblyBackend;
 use crate::error::Error;
 use crate::nodes::{NodeSet, MAX_DEGREE};
 use crate::norms::LATTICE;
@@ -109,6 +110,16 @@ pub fn choose(
     } else {
         Change::Split
     }
+}
+
+/// Refuses hp (`hp` true) with a backend other than the CPU's.
+pub fn check_backend(hp: bool, backend: &dyn AssemblyBackend) -> Result<(), Error> {
+    let kind = backend.info().kind;
+    if hp && kind != crate::backend::BackendKind::Cpu {
+        let backend = kind.to_string();
+        return Err(crate::error::InputError::HpBackend { backend }.into());
+    }
+    Ok(())
 }
 
 /// The loop's degrees: per element, its degree and lineage, and the node

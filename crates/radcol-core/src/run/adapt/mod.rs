@@ -31,7 +31,7 @@ pub use options::{
     AdaptOptions, ESTIMATE_WITHIN, MARK_FRACTION, MAX_FRACTION, MIN_SIZE, STALL_GENERATIONS,
 };
 
-use super::pipeline::{solve_step, Plans, Previous};
+use super::pipeline::{solve_step, PerElement, Plans, Previous};
 use super::{discretize, OperatorKind, SolveConfig, SolveOutcome, Timings};
 use crate::assembly::{AssemblyBackend, Unchanged};
 use crate::error::Error;
@@ -40,7 +40,7 @@ use crate::problem::Problem;
 use budget::budget;
 use history::History;
 use hp::Degrees;
-use next::{advance, transfer, Next};
+use next::carry;
 pub use next::{on_refined, on_refined_at, refine};
 use serde::Serialize;
 use std::sync::Arc;
@@ -147,11 +147,7 @@ pub fn solve_adaptive(
     mut on_step: impl FnMut(&AdaptStep),
 ) -> Result<AdaptOutcome, Error> {
     opts.check()?;
-    let info = backend.info();
-    if opts.hp && info.kind != crate::backend::BackendKind::Cpu {
-        let backend = info.kind.to_string();
-        return Err(crate::error::InputError::HpBackend { backend }.into());
-    }
+    hp::check_backend(opts.hp, backend)?;
     let cfg = SolveConfig {
         estimate: true,
         ..cfg.clone()
@@ -169,46 +165,25 @@ pub fn solve_adaptive(
     // The previous solve, its plans and which elements it shares with this
     // mesh: pairs of unchanged elements are neither classified nor
     // integrated again.
-    let mut previous: Option<(SolveOutcome, Plans, Arc<Unchanged>)> = None;
+    let mut previous: Option<Held> = None;
     // The previous step's singular points, for a stop before this step ends.
     let mut pending_singular = Vec::new();
     loop {
         let t = Instant::now();
-        let prev = previous
-            .as_ref()
-            .map(|(outcome, plans, unchanged)| Previous {
-                outcome,
-                plans,
-                unchanged: unchanged.clone(),
-                estimate_within: opts.estimate_within * opts.mark_fraction * opts.target,
-            });
-        let result = solve_step(
-            problem,
-            &cfg,
-            (
-                mesh.clone(),
-                degrees.as_ref().map(|d| (d.sets(), d.degrees())),
-            ),
-            backend,
-            guess.as_deref(),
-            prev.as_ref(),
-        );
-        drop(prev);
-        let (out, plans) = match result {
-            Ok(step) => step,
+        let per_element = degrees.as_ref().map(|d| (d.sets(), d.degrees()));
+        let step = (mesh.clone(), per_element, guess.as_deref());
+        let Some((out, plans)) = solve_or_stand(problem, &cfg, opts, backend, step, &previous)?
+        else {
             // The step's peak (matrix, check rows, solver) would not fit,
             // although the budget let its matrices in: the previous step's
             // answer stands, as at any other budget stop.
-            Err(Error::Input(e)) if e.is_peak_refusal() && previous.is_some() => {
-                let (outcome, _, _) = previous.take().expect("checked");
-                return Ok(AdaptOutcome {
-                    outcome,
-                    steps,
-                    stop: StopReason::Memory,
-                    singular: pending_singular,
-                });
-            }
-            Err(e) => return Err(e),
+            let (outcome, _, _) = previous.take().expect("refused after a step");
+            return Ok(AdaptOutcome {
+                outcome,
+                steps,
+                stop: StopReason::Memory,
+                singular: pending_singular,
+            });
         };
         // The previous solve has served: its matrix goes before the next one.
         drop(previous.take());
@@ -247,24 +222,50 @@ pub fn solve_adaptive(
             });
         }
         let marked = &marked[..split];
-        let next = advance(&out, marked, (&indicator, &negative), degrees.as_ref());
-        guess = Some(transfer(&out, &next.mesh, &next.parents, &|k| {
-            next.nodes(k, &out)
-        }));
-        history = history.refined(&next.parents, &next.changed, &indicator);
-        for &k in &next.lowered {
-            history.forget(k);
-        }
-        let unchanged = Arc::new(Unchanged::refined(&next.parents, &next.changed));
-        let Next {
-            mesh: refined,
-            degrees: next_degrees,
-            ..
-        } = next;
-        degrees = next_degrees;
-        previous = Some((out, plans, unchanged));
+        let next = carry(
+            &out,
+            marked,
+            (&indicator, &negative),
+            degrees.as_ref(),
+            &history,
+        );
+        (mesh, guess, history, degrees) = (next.mesh, Some(next.guess), next.history, next.degrees);
+        previous = Some((out, plans, next.unchanged));
         pending_singular = singular;
-        mesh = Arc::new(refined);
+    }
+}
+
+/// A step's mesh, its degrees (with hp) and GMRES's start.
+type StepInput<'a> = (Arc<Mesh>, Option<PerElement<'a>>, Option<&'a [Vec<f64>]>);
+
+/// The previous solve, its plans and which elements the next mesh shares
+/// with it.
+type Held = (SolveOutcome, Plans, Arc<Unchanged>);
+
+/// The step on `mesh` (with a degree per element when given, from `guess`),
+/// reusing what `previous` has; None when its peak would not fit after a
+/// previous step (whose answer then stands).
+fn solve_or_stand(
+    problem: &Problem,
+    cfg: &SolveConfig,
+    opts: &AdaptOptions,
+    backend: &dyn AssemblyBackend,
+    (mesh, per_element, guess): StepInput<'_>,
+    previous: &Option<Held>,
+) -> Result<Option<(SolveOutcome, Plans)>, Error> {
+    let prev = previous
+        .as_ref()
+        .map(|(outcome, plans, unchanged)| Previous {
+            outcome,
+            plans,
+            unchanged: unchanged.clone(),
+            estimate_within: opts.estimate_within * opts.mark_fraction * opts.target,
+        });
+    let step = (mesh, per_element);
+    match solve_step(problem, cfg, step, backend, guess, prev.as_ref()) {
+        Ok(step) => Ok(Some(step)),
+        Err(Error::Input(e)) if e.is_peak_refusal() && previous.is_some() => Ok(None),
+        Err(e) => Err(e),
     }
 }
 
@@ -374,17 +375,8 @@ fn describe(
             .reduce(f64::max),
         timings: out.timings,
         operator: out.operator.kind(),
-        degrees: degree_counts(&out.discretization),
+        degrees: out.discretization.elements_per_degree(),
     }
-}
-
-/// How many elements of `disc` have each degree (index: the degree).
-fn degree_counts(disc: &crate::discretization::Discretization) -> Vec<usize> {
-    let mut counts = vec![0; disc.max_degree() + 1];
-    for k in 0..disc.mesh().len() {
-        counts[disc.degree(k)] += 1;
-    }
-    counts
 }
 
 /// Per element, the worst channel's estimate relative to its max |u_n|, and

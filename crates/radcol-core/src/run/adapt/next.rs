@@ -3,12 +3,15 @@
 //! lower or raised: [`super::hp`]), and the solution carried to the new
 //! nodes as GMRES's starting point.
 
+use super::history::History;
 use super::hp::{Change, Degrees};
+use crate::assembly::Unchanged;
 use crate::geometry::barycentric_st;
 use crate::mesh::Mesh;
 use crate::nodes::NodeSet;
 use crate::run::SolveOutcome;
 use crate::solution::Solution;
+use std::sync::Arc;
 
 /// `n` flags, set at `split`.
 pub(super) fn marks(n: usize, split: &[usize]) -> Vec<bool> {
@@ -39,6 +42,44 @@ pub fn refine(mesh: &Mesh, split: &[usize]) -> (Mesh, Vec<usize>) {
     }
     let refined = Mesh::from_elements(mesh.surface().clone(), mesh.level(), elements);
     (refined, parents)
+}
+
+/// What the next step starts from.
+pub(super) struct Carried {
+    /// The refined mesh.
+    pub(super) mesh: Arc<Mesh>,
+    /// The solution of every channel at its nodes (GMRES's start).
+    pub(super) guess: Vec<Vec<f64>>,
+    /// The elements' estimate history.
+    pub(super) history: History,
+    /// Which elements it shares with the previous mesh.
+    pub(super) unchanged: Arc<Unchanged>,
+    /// With hp, every element's degree and lineage.
+    pub(super) degrees: Option<Degrees>,
+}
+
+/// The step after `out` ([`advance`]), with the solution transferred and
+/// the `history` carried over.
+pub(super) fn carry(
+    out: &SolveOutcome,
+    marked: &[usize],
+    (indicator, negative): (&[f64], &[bool]),
+    degrees: Option<&Degrees>,
+    history: &History,
+) -> Carried {
+    let next = advance(out, marked, (indicator, negative), degrees);
+    let guess = transfer(out, &next.mesh, &next.parents, &|k| next.nodes(k, out));
+    let mut history = history.refined(&next.parents, &next.changed, indicator);
+    for &k in &next.lowered {
+        history.forget(k);
+    }
+    Carried {
+        guess,
+        history,
+        unchanged: Arc::new(Unchanged::refined(&next.parents, &next.changed)),
+        mesh: Arc::new(next.mesh),
+        degrees: next.degrees,
+    }
 }
 
 /// The next step's mesh and degrees.
