@@ -239,6 +239,9 @@ impl<'a> Relighter<'a> {
             self.lu = Some((rho.to_vec(), lu, kappa));
         }
         let (_, lu, kappa) = self.lu.as_ref().expect("just built");
+        // x holds GMRES's starting guess (the previous adaptive step's
+        // solution); LU solves for the emission itself.
+        x.copy_from_slice(emission);
         lu.solve_in_place(x)?;
         if let Some(p) = &self.cfg.progress {
             p.advance(decades);
