@@ -66,7 +66,8 @@ pub struct SolveArgs {
     /// With --target-error: a degree per element (hp). A marked element is raised one
     /// degree where its error fell as for a smooth u when it last changed, and split with
     /// its children one degree lower where it fell as at a shadow or contact line (degrees
-    /// 1..=4; fewer unknowns and less memory; faster at tight targets). CPU backend.
+    /// 1..=4). Fewer unknowns and less memory; faster with --solver lu, usually slower
+    /// with GMRES (README, "--hp"). CPU backend.
     #[arg(help_heading = "Accuracy", long, requires = "target_error")]
     pub hp: bool,
 

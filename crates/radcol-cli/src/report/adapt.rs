@@ -123,9 +123,7 @@ impl fmt::Display for AdaptLine<'_> {
             write!(f, ", estimate updated (within {})", sci(b))?;
         }
         if s.degrees.iter().filter(|&&n| n > 0).count() > 1 {
-            let used = s.degrees.iter().enumerate().filter(|(_, &n)| n > 0);
-            let text: Vec<String> = used.map(|(r, n)| format!("{n} of r = {r}")).collect();
-            write!(f, ", elements {}", text.join(", "))?;
+            write!(f, ", elements {}", super::by_degree(&s.degrees))?;
         }
         let t = &s.timings;
         write!(

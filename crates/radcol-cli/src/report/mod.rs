@@ -50,6 +50,14 @@ fn sci(v: f64) -> String {
     format!("{v:.3e}")
 }
 
+/// Elements per degree (index: the degree) as `88 of r = 1, 40 of r = 2`,
+/// the degrees no element has left out.
+fn by_degree(counts: &[usize]) -> String {
+    let used = counts.iter().enumerate().filter(|(_, &n)| n > 0);
+    let text: Vec<String> = used.map(|(r, n)| format!("{n} of r = {r}")).collect();
+    text.join(", ")
+}
+
 /// 13 significant digits: fixed-point for everyday magnitudes, scientific
 /// beyond them (an integral of 1e300 is not 300 digits long).
 fn precise(v: f64) -> String {

@@ -384,11 +384,8 @@ impl fmt::Display for SolveReport {
                 .map(|h| format!(", max edge {h:.6}"))
                 .unwrap_or_default()
         )?;
-        let by_degree = self.degrees.as_ref().map_or_else(String::new, |n| {
-            let used = n.iter().enumerate().filter(|(_, &n)| n > 0);
-            let text: Vec<String> = used.map(|(r, n)| format!("{n} of r = {r}")).collect();
-            format!(" ({})", text.join(", "))
-        });
+        let by_degree = (self.degrees.as_deref())
+            .map_or_else(String::new, |n| format!(" ({})", super::by_degree(n)));
         writeln!(
             f,
             "  mesh        {} elements{by_degree}, {} unknowns, h = {:.6}, shape ratio {:.4} .. {:.4}",

@@ -30,9 +30,10 @@
 //! Measured (README, "`--hp`"): the thresholds were swept on the shadowed
 //! floor and the Cornell box to 1e-3 (2^{−r/2} and 0.6 lie in the flat
 //! part of both). The loop reaches the targets with 1.06–1.5× fewer
-//! unknowns than at one degree, but in less wall time only on the shadowed
-//! floor at 1e-4: its steps are more, and cost more per unknown (more
-//! elements of degree 1). So it is an option, not the default.
+//! unknowns than at one degree, but in less wall time only with LU (whose
+//! cost grows like N³) and, with GMRES, on the shadowed floor at 1e-4: its
+//! steps are more, and cost more per unknown (more elements of degree 1).
+//! So it is an option, not the default.
 
 use crate::alpha0::auto_alpha;
 use crate::assembly::AssemblyBackend;

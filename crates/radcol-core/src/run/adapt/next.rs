@@ -14,7 +14,7 @@ use crate::solution::Solution;
 use std::sync::Arc;
 
 /// `n` flags, set at `split`.
-pub(super) fn marks(n: usize, split: &[usize]) -> Vec<bool> {
+fn marks(n: usize, split: &[usize]) -> Vec<bool> {
     let mut m = vec![false; n];
     for &k in split {
         m[k] = true;
@@ -25,10 +25,7 @@ pub(super) fn marks(n: usize, split: &[usize]) -> Vec<bool> {
 /// `mesh` with the elements `split` replaced in place by their four
 /// children, and each new element's parent in `mesh`.
 pub fn refine(mesh: &Mesh, split: &[usize]) -> (Mesh, Vec<usize>) {
-    let mut marked = vec![false; mesh.len()];
-    for &k in split {
-        marked[k] = true;
-    }
+    let marked = marks(mesh.len(), split);
     let mut elements = Vec::with_capacity(mesh.len() + 3 * split.len());
     let mut parents = Vec::with_capacity(elements.capacity());
     for (k, e) in mesh.elements().iter().enumerate() {
@@ -83,23 +80,23 @@ pub(super) fn carry(
 }
 
 /// The next step's mesh and degrees.
-pub(super) struct Next {
+struct Next {
     /// The refined mesh.
-    pub(super) mesh: Mesh,
+    mesh: Mesh,
     /// Each new element's element in the previous mesh.
-    pub(super) parents: Vec<usize>,
+    parents: Vec<usize>,
     /// Per previous element: split or raised (its rows and columns are
     /// computed again).
-    pub(super) changed: Vec<bool>,
+    changed: Vec<bool>,
     /// New elements one degree lower than their parent.
-    pub(super) lowered: Vec<usize>,
+    lowered: Vec<usize>,
     /// With hp, every new element's degree and lineage.
-    pub(super) degrees: Option<Degrees>,
+    degrees: Option<Degrees>,
 }
 
 impl Next {
     /// The node set of new element `k` (`out`: the previous solve).
-    pub(super) fn nodes<'a>(&'a self, k: usize, out: &'a SolveOutcome) -> &'a NodeSet {
+    fn nodes<'a>(&'a self, k: usize, out: &'a SolveOutcome) -> &'a NodeSet {
         match &self.degrees {
             Some(d) => d.set(d.degrees()[k]),
             None => out.discretization.nodes_of(self.parents[k]),
@@ -110,7 +107,7 @@ impl Next {
 /// The step after `out`: the `marked` elements (`indicator` and where u_n
 /// is `negative` per element) split, or with hp split, split one degree
 /// lower or raised as [`Degrees::choose`] decides.
-pub(super) fn advance(
+fn advance(
     out: &SolveOutcome,
     marked: &[usize],
     (indicator, negative): (&[f64], &[bool]),
