@@ -30,6 +30,75 @@ pub trait SurfaceMap: Send + Sync + Debug {
             self.push_forward(x, v),
         ]
     }
+    /// The surface points of a batch of parameter points at once (the rule
+    /// points of a near or self pair): one call per batch, in a loop over
+    /// structure-of-arrays the compiler can vectorize. `u` and `v` are the
+    /// element's edge vectors; the normal is along DF(x)u × DF(x)v and the
+    /// Jacobian is that cross product's length. Maps override it with a
+    /// closed form.
+    fn frame_batch(&self, b: &mut FrameBatch, u: DVec3, v: DVec3) {
+        for i in 0..b.len.min(FRAME_BATCH) {
+            let x = DVec3::new(b.x[0][i], b.x[1][i], b.x[2][i]);
+            let [position, du, dv] = self.frame(x, u, v);
+            b.set(i, position, du.cross(dv));
+        }
+    }
+}
+
+/// Points per [`FrameBatch`].
+pub const FRAME_BATCH: usize = 32;
+
+/// Parameter points in, surface points out, each coordinate in its own
+/// array ([`SurfaceMap::frame_batch`]).
+#[derive(Clone, Debug)]
+pub struct FrameBatch {
+    /// How many of the `FRAME_BATCH` slots are in use.
+    pub len: usize,
+    /// The parameter points x (input).
+    pub x: [[f64; FRAME_BATCH]; 3],
+    /// F(x).
+    pub position: [[f64; FRAME_BATCH]; 3],
+    /// The unit normal along DF(x)u × DF(x)v.
+    pub normal: [[f64; FRAME_BATCH]; 3],
+    /// |DF(x)u × DF(x)v|.
+    pub jacobian: [f64; FRAME_BATCH],
+}
+
+impl Default for FrameBatch {
+    fn default() -> Self {
+        Self {
+            len: 0,
+            x: [[0.0; FRAME_BATCH]; 3],
+            position: [[0.0; FRAME_BATCH]; 3],
+            normal: [[0.0; FRAME_BATCH]; 3],
+            jacobian: [0.0; FRAME_BATCH],
+        }
+    }
+}
+
+impl FrameBatch {
+    /// Slot `i`: position and the (unnormalized) cross product.
+    #[inline]
+    fn set(&mut self, i: usize, position: DVec3, cross: DVec3) {
+        let jacobian = cross.length();
+        let inv = 1.0 / jacobian;
+        for (c, (p, n)) in [(position, cross)]
+            .iter()
+            .flat_map(|(p, n)| [(p.x, n.x), (p.y, n.y), (p.z, n.z)])
+            .enumerate()
+        {
+            self.position[c][i] = p;
+            self.normal[c][i] = n * inv;
+        }
+        self.jacobian[i] = jacobian;
+    }
+
+    /// Slot `i`'s position, unit normal and Jacobian.
+    #[inline]
+    pub fn get(&self, i: usize) -> (DVec3, DVec3, f64) {
+        let v = |a: &[[f64; FRAME_BATCH]; 3]| DVec3::new(a[0][i], a[1][i], a[2][i]);
+        (v(&self.position), v(&self.normal), self.jacobian[i])
+    }
 }
 
 /// F(x) = x: flat patches (polyhedra, OBJ faces).
@@ -73,6 +142,38 @@ impl SurfaceMap for RadialProjection {
         let xh = x * inv;
         let d = |w: DVec3| self.semi_axes * ((w - xh * xh.dot(w)) * inv);
         [self.center + self.semi_axes * xh, d(u), d(v)]
+    }
+    /// With D = diag(a) and P = I - x̂x̂ᵀ, DF(x) = D P / |x|. P u and P v lie
+    /// in the plane normal to x̂, so P u × P v = (x̂ · (u × v)) x̂, and
+    /// D w₁ × D w₂ = det(D) D⁻¹ (w₁ × w₂): the cross product is
+    /// abc (x · (u × v)) (x ⊘ a) / |x|⁴, with no tangent formed.
+    fn frame_batch(&self, b: &mut FrameBatch, u: DVec3, v: DVec3) {
+        let (a, c) = (self.semi_axes.to_array(), self.center.to_array());
+        let inv_a = self.semi_axes.recip().to_array();
+        let abc = a[0] * a[1] * a[2];
+        let n = u.cross(v).to_array();
+        let len = b.len.min(FRAME_BATCH);
+        for i in 0..len {
+            // The cross product is s y with y = x ⊘ a, s = abc (x · n) / |x|⁴:
+            // the normal is ±y / |y| and the Jacobian |s| |y|. One division
+            // gives both 1 / |x| and 1 / |y|.
+            let x = [b.x[0][i], b.x[1][i], b.x[2][i]];
+            let y = [0, 1, 2].map(|j| x[j] * inv_a[j]);
+            let (len_x, len_y) = (
+                (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt(),
+                (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt(),
+            );
+            let inv_xy = 1.0 / (len_x * len_y);
+            let (inv_x, inv_y) = (inv_xy * len_y, inv_xy * len_x);
+            let inv2 = inv_x * inv_x;
+            let scale = abc * (x[0] * n[0] + x[1] * n[1] + x[2] * n[2]) * (inv2 * inv2);
+            let unit = scale.signum() * inv_y;
+            for j in 0..3 {
+                b.position[j][i] = c[j] + a[j] * (x[j] * inv_x);
+                b.normal[j][i] = y[j] * unit;
+            }
+            b.jacobian[i] = scale.abs() * len_y;
+        }
     }
 }
 

@@ -203,7 +203,7 @@ pub fn floor_under_occluder(emitter: &[DVec3], occluder: &[DVec3]) -> Surface {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::SurfaceMap;
+    use crate::geometry::{FrameBatch, SurfaceMap};
 
     /// Inward orientation: the normal (b-a)×(c-a) of every base triangle points
     /// towards the centre of the enclosure.
@@ -249,5 +249,51 @@ mod tests {
         assert!((position - f.map(x)).length() < 1e-15);
         assert!((du - f.push_forward(x, u)).length() < 1e-15);
         assert!((dv - f.push_forward(x, v)).length() < 1e-15);
+    }
+
+    /// The batched frames of the radial projection (a closed form with no
+    /// tangent formed) against the tangents' cross product, on several
+    /// ellipsoids and on points of every octant, the batch partly filled.
+    #[test]
+    fn radial_projection_batch_is_the_tangents_cross_product() {
+        for (centre, axes) in [
+            (DVec3::ZERO, DVec3::ONE),
+            (DVec3::new(0.1, 0.2, 0.3), DVec3::new(1.0, 2.0, 3.0)),
+            (DVec3::new(-1.0, 0.0, 2.0), DVec3::new(1.0, 0.8, 0.1)),
+        ] {
+            let f = RadialProjection {
+                center: centre,
+                semi_axes: axes,
+            };
+            let (u, v) = (DVec3::new(-0.4, 0.1, 0.7), DVec3::new(0.2, -0.3, 0.05));
+            let mut b = FrameBatch {
+                len: 27,
+                ..Default::default()
+            };
+            for i in 0..b.len {
+                let sign = |bit: usize| if (i >> bit) & 1 == 0 { 1.0 } else { -1.0 };
+                let x = DVec3::new(
+                    0.3 * sign(0),
+                    0.5 * sign(1),
+                    (0.2 + 0.01 * i as f64) * sign(2),
+                );
+                (b.x[0][i], b.x[1][i], b.x[2][i]) = (x.x, x.y, x.z);
+            }
+            let xs: Vec<DVec3> = (0..b.len)
+                .map(|i| DVec3::new(b.x[0][i], b.x[1][i], b.x[2][i]))
+                .collect();
+            f.frame_batch(&mut b, u, v);
+            for (i, &x) in xs.iter().enumerate() {
+                let [position, du, dv] = f.frame(x, u, v);
+                let cross = du.cross(dv);
+                let (p, n, jac) = b.get(i);
+                assert!((p - position).length() <= 1e-15 * position.length().max(1.0));
+                assert!(
+                    (n - cross.normalize()).length() <= 1e-14,
+                    "{n} against {cross}"
+                );
+                crate::assert_close!(jac, cross.length(), 1e-14 * cross.length());
+            }
+        }
     }
 }

@@ -13,13 +13,16 @@
 //!   P and each is integrated in Duffy coordinates collapsed at P, where the
 //!   bounded, direction-dependent kernel of a curved surface becomes smooth.
 
-use crate::kernel::g;
+use crate::geometry::FRAME_BATCH;
 use crate::mesh::Mesh;
 use crate::quadrature::{RuleLadder, TriangleRule, MAX_RULE_DEGREE};
+use batch::PointBatch;
+pub use batch::{Integrand, LagrangeBasis};
 use glam::DVec3;
 use std::f64::consts::FRAC_1_PI;
 use std::sync::Arc;
 
+mod batch;
 mod rows;
 mod self_pair;
 pub use self_pair::{SelfRules, MAX_SELF_DEPTH};
@@ -88,10 +91,6 @@ pub struct FieldPoint {
     /// (element, s, t) when P lies on an element of the mesh integrated over.
     pub on_element: Option<(usize, [f64; 2])>,
 }
-
-/// Callback φ: given element k, (s, t) and the point Q = m_k(s, t), writes the
-/// `m` integrand factors into the slice.
-pub type Integrand<'a> = dyn Fn(usize, [f64; 2], DVec3, &mut [f64]) + Sync + 'a;
 
 /// Integrates over elements of one mesh.
 #[derive(Debug)]
@@ -212,7 +211,7 @@ impl<'a> ElementIntegrator<'a> {
         p: &FieldPoint,
         k: usize,
         poly_degree: usize,
-        phi: &Integrand<'_>,
+        phi: &dyn Integrand,
         out: &mut [f64],
     ) -> u64 {
         if let Some((ke, st)) = p.on_element {
@@ -237,7 +236,7 @@ impl<'a> ElementIntegrator<'a> {
         k: usize,
         tri: [[f64; 2]; 3],
         poly_degree: usize,
-        phi: &Integrand<'_>,
+        phi: &dyn Integrand,
         out: &mut [f64],
     ) -> u64 {
         self.integrate_adaptive(p, k, tri, 0, poly_degree, phi, out)
@@ -250,14 +249,12 @@ impl<'a> ElementIntegrator<'a> {
         k: usize,
         tri: [[f64; 2]; 3],
         rule: &TriangleRule,
-        phi: &Integrand<'_>,
+        phi: &dyn Integrand,
         out: &mut [f64],
     ) -> u64 {
         let [a, b, c] = tri;
         let (e1, e2) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
         let det = (e1[0] * e2[1] - e1[1] * e2[0]).abs();
-        let m = out.len();
-        let mut buf = [0.0f64; 64];
         let map = self.element_map(k);
         if let ElementMap::Affine(v0, es, et, q0) = map {
             let flat = FlatPiece {
@@ -273,18 +270,19 @@ impl<'a> ElementIntegrator<'a> {
             flat.apply(p, k, rule, phi, out);
             return rule.len() as u64;
         }
-        for (&[x, y], &w) in rule.points.iter().zip(&rule.weights) {
-            let st = [a[0] + x * e1[0] + y * e2[0], a[1] + x * e1[1] + y * e2[1]];
-            let q = map.point(st);
-            let gw =
-                g(p.position, p.normal, q.position, q.normal) * q.jacobian * w * det * FRAC_1_PI;
-            if gw == 0.0 {
-                continue;
+        let mut batch = PointBatch::new(out.len());
+        for (xys, ws) in rule
+            .points
+            .chunks(FRAME_BATCH)
+            .zip(rule.weights.chunks(FRAME_BATCH))
+        {
+            batch.clear();
+            for (&[x, y], &w) in xys.iter().zip(ws) {
+                let st = [a[0] + x * e1[0] + y * e2[0], a[1] + x * e1[1] + y * e2[1]];
+                batch.push(st, w * det * FRAC_1_PI);
             }
-            phi(k, st, q.position, &mut buf[..m]);
-            for (o, v) in out.iter_mut().zip(&buf[..m]) {
-                *o += gw * v;
-            }
+            batch.evaluate(&map, k, phi);
+            batch.add(p, out);
         }
         rule.len() as u64
     }
@@ -308,7 +306,7 @@ impl<'a> ElementIntegrator<'a> {
         tri: [[f64; 2]; 3],
         depth: u32,
         poly_degree: usize,
-        phi: &Integrand<'_>,
+        phi: &dyn Integrand,
         out: &mut [f64],
     ) -> u64 {
         let curved = !self.mesh.is_flat(k);
@@ -364,7 +362,7 @@ impl FlatPiece {
         p: &FieldPoint,
         k: usize,
         rule: &TriangleRule,
-        phi: &Integrand<'_>,
+        phi: &dyn Integrand,
         out: &mut [f64],
     ) {
         let d0 = self.v0 - p.position;
@@ -398,7 +396,7 @@ impl FlatPiece {
                     continue;
                 }
                 let q = self.v0 + self.es * s[i] + self.et * t[i];
-                phi(k, [s[i], t[i]], q, &mut basis[..m]);
+                phi.eval(k, [s[i], t[i]], q, &mut basis[..m]);
                 for (o, v) in out.iter_mut().zip(&basis[..m]) {
                     *o += gw[i] * v;
                 }
@@ -415,19 +413,6 @@ enum ElementMap<'a> {
     Affine(DVec3, DVec3, DVec3, crate::mesh::SurfacePoint),
     /// A curved element of a mesh.
     Curved(&'a Mesh, usize),
-}
-
-impl ElementMap<'_> {
-    #[inline]
-    fn point(&self, [s, t]: [f64; 2]) -> crate::mesh::SurfacePoint {
-        match *self {
-            ElementMap::Affine(v0, es, et, q0) => crate::mesh::SurfacePoint {
-                position: v0 + es * s + et * t,
-                ..q0
-            },
-            ElementMap::Curved(mesh, k) => mesh.point(k, s, t),
-        }
-    }
 }
 
 /// The far-rule degree, see [`ElementIntegrator::far_degree`].

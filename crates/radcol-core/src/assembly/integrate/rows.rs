@@ -13,9 +13,11 @@
 //! run: the near pairs 2.3–2.4× faster than row by row at r = 2 and 3, for
 //! 12–18 % more kernel evaluations).
 
+use super::batch::PointBatch;
 use super::{far_degree, piece_ball, ElementIntegrator, FieldPoint, Integrand};
-use crate::kernel::g;
+use crate::geometry::FRAME_BATCH;
 use crate::quadrature::MAX_RULE_DEGREE;
+use std::cell::RefCell;
 use std::f64::consts::FRAC_1_PI;
 
 /// A sub-triangle of σ.
@@ -26,8 +28,10 @@ struct RowWalk<'a> {
     ps: &'a [FieldPoint],
     k: usize,
     poly_degree: usize,
-    phi: &'a Integrand<'a>,
+    phi: &'a dyn Integrand,
     m: usize,
+    /// The rule points of the piece being integrated.
+    batch: RefCell<PointBatch>,
 }
 
 impl ElementIntegrator<'_> {
@@ -41,7 +45,7 @@ impl ElementIntegrator<'_> {
         ps: &[FieldPoint],
         k: usize,
         poly_degree: usize,
-        phi: &Integrand<'_>,
+        phi: &dyn Integrand,
         out: &mut [f64],
     ) -> u64 {
         debug_assert!(ps.iter().all(|p| p.on_element.is_none_or(|(e, _)| e != k)));
@@ -52,6 +56,7 @@ impl ElementIntegrator<'_> {
             poly_degree,
             phi,
             m: out.len() / ps.len().max(1),
+            batch: RefCell::new(PointBatch::new(out.len() / ps.len().max(1))),
         };
         let whole = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
         self.walk_rows(&walk, &rows, whole, 0, out)
@@ -115,27 +120,21 @@ impl ElementIntegrator<'_> {
         let [a, b, c] = tri;
         let (e1, e2) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
         let det = (e1[0] * e2[1] - e1[1] * e2[0]).abs();
-        let m = w.m;
-        let mut basis = [0.0f64; 64];
         let map = self.element_map(w.k);
-        for (&[x, y], &wt) in rule.points.iter().zip(&rule.weights) {
-            let st = [a[0] + x * e1[0] + y * e2[0], a[1] + x * e1[1] + y * e2[1]];
-            let q = map.point(st);
-            let scale = q.jacobian * wt * det * FRAC_1_PI;
-            let mut basis_ready = false;
+        let mut batch = w.batch.borrow_mut();
+        for (xys, wts) in rule
+            .points
+            .chunks(FRAME_BATCH)
+            .zip(rule.weights.chunks(FRAME_BATCH))
+        {
+            batch.clear();
+            for (&[x, y], &wt) in xys.iter().zip(wts) {
+                let st = [a[0] + x * e1[0] + y * e2[0], a[1] + x * e1[1] + y * e2[1]];
+                batch.push(st, wt * det * FRAC_1_PI);
+            }
+            batch.evaluate(&map, w.k, w.phi);
             for &i in rows {
-                let p = &w.ps[i];
-                let gw = g(p.position, p.normal, q.position, q.normal) * scale;
-                if gw == 0.0 {
-                    continue;
-                }
-                if !basis_ready {
-                    (w.phi)(w.k, st, q.position, &mut basis[..m]);
-                    basis_ready = true;
-                }
-                for (o, v) in out[i * m..(i + 1) * m].iter_mut().zip(&basis[..m]) {
-                    *o += gw * v;
-                }
+                batch.add(&w.ps[i], &mut out[i * w.m..(i + 1) * w.m]);
             }
         }
         (rule.len() * rows.len()) as u64

@@ -29,9 +29,10 @@
 //! the higher taken; where the last two disagree, its quadrants are
 //! integrated the same way, recursively.
 
+use super::batch::PointBatch;
 use super::{ElementIntegrator, FieldPoint, Integrand};
-use crate::kernel::g;
 use crate::quadrature::gauss::gauss_legendre01;
+use std::cell::RefCell;
 use std::f64::consts::FRAC_1_PI;
 
 /// Deepest quadrant split of a Duffy window: 4^-10 of the window, far below
@@ -79,11 +80,13 @@ struct Duffy<'a> {
     pa: [f64; 2],
     ab: [f64; 2],
     det: f64,
-    phi: &'a Integrand<'a>,
+    phi: &'a dyn Integrand,
     m: usize,
     /// The poles' centre v* and distance δ: v = v* + δ sinh(x).
     foot: f64,
     delta: f64,
+    /// The rule points being integrated (one for all windows of the pair).
+    batch: &'a RefCell<PointBatch>,
 }
 
 /// A rectangle [u0, u1] × [x0, x1] of Duffy coordinates, x the angular
@@ -108,7 +111,7 @@ impl ElementIntegrator<'_> {
         p: &FieldPoint,
         k: usize,
         st0: [f64; 2],
-        phi: &Integrand<'_>,
+        phi: &dyn Integrand,
         out: &mut [f64],
     ) -> u64 {
         let corners = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
@@ -118,6 +121,7 @@ impl ElementIntegrator<'_> {
         // First pass: every window with the ladder's first rule (the
         // integral's size, and the first value to compare).
         let first_rule = &self.self_rule.ladder[0];
+        let batch = RefCell::new(PointBatch::new(m));
         let mut windows = Vec::with_capacity(6);
         for e in 0..3 {
             let (a, b) = (corners[e], corners[(e + 1) % 3]);
@@ -139,6 +143,7 @@ impl ElementIntegrator<'_> {
                 m,
                 foot,
                 delta,
+                batch: &batch,
             };
             // Either side of the foot (one side when it is an end of AB).
             let ends = [-(foot / delta).asinh(), 0.0, ((1.0 - foot) / delta).asinh()];
@@ -219,37 +224,35 @@ impl ElementIntegrator<'_> {
     ) -> u64 {
         let (ux, uw) = radial;
         let (vx, vw) = angular;
-        let mut buf = [0.0f64; 64];
-        let mut evals = 0;
+        let map = self.element_map(d.k);
+        // Points of several angular lines share a batch.
+        let mut batch = d.batch.borrow_mut();
+        batch.clear();
         for (&x, &wx) in vx.iter().zip(vw) {
             let x = v0 + (v1 - v0) * x;
-            let v = d.foot + d.delta * x.sinh();
-            let wv = wx * d.delta * x.cosh();
+            // sinh and cosh from one exponential (v's absolute error stays
+            // at rounding: it is an offset, not a relative quantity).
+            let (e, inv_e) = (x.exp(), (-x).exp());
+            let v = d.foot + d.delta * (0.5 * (e - inv_e));
+            let cosh = 0.5 * (e + inv_e);
+            let wv = wx * d.delta * cosh * (u1 - u0) * (v1 - v0) * d.det * FRAC_1_PI;
             for (&y, &wu) in ux.iter().zip(uw) {
+                if batch.is_full() {
+                    batch.evaluate(&map, d.k, d.phi);
+                    batch.add(d.p, &mut acc[..d.m]);
+                    batch.clear();
+                }
                 let u = u0 + (u1 - u0) * y;
                 let st = [
                     d.st0[0] + u * d.pa[0] + u * v * d.ab[0],
                     d.st0[1] + u * d.pa[1] + u * v * d.ab[1],
                 ];
-                let q = self.mesh.point(d.k, st[0], st[1]);
-                let wt = wu * wv * (u1 - u0) * (v1 - v0);
-                let gw = g(d.p.position, d.p.normal, q.position, q.normal)
-                    * q.jacobian
-                    * wt
-                    * u
-                    * d.det
-                    * FRAC_1_PI;
-                evals += 1;
-                if gw == 0.0 {
-                    continue;
-                }
-                (d.phi)(d.k, st, q.position, &mut buf[..d.m]);
-                for (o, val) in acc.iter_mut().zip(&buf[..d.m]) {
-                    *o += gw * val;
-                }
+                batch.push(st, wu * wv * u);
             }
         }
-        evals
+        batch.evaluate(&map, d.k, d.phi);
+        batch.add(d.p, &mut acc[..d.m]);
+        (ux.len() * vx.len()) as u64
     }
 }
 
@@ -288,6 +291,7 @@ mod tests {
     use super::*;
     use crate::assembly::QuadratureOptions;
     use crate::geometry::shapes::{ellipsoid, sphere};
+    use crate::kernel::g;
     use crate::mesh::Mesh;
     use crate::nodes::NodeSet;
     use crate::quadrature::RuleLadder;

@@ -3,7 +3,7 @@
 
 use super::kernels::{contract, far_kernel_flat, far_kernel_row, RUN_CHUNK};
 use super::{AssemblyPlan, FillMode, PairClass};
-use crate::assembly::integrate::{ElementIntegrator, FieldPoint, Integrand};
+use crate::assembly::integrate::{ElementIntegrator, FieldPoint, Integrand, LagrangeBasis};
 use crate::assembly::VisibilityMode;
 use crate::discretization::CollocationPoint;
 use crate::visibility::clip;
@@ -15,7 +15,7 @@ struct BlockFill<'a, 'i> {
     kp: usize,
     pts: &'a [CollocationPoint],
     integrator: &'a ElementIntegrator<'i>,
-    phi: &'a Integrand<'a>,
+    phi: &'a dyn Integrand,
     ncols: usize,
     /// The block's first column (an element's first unknown).
     first: usize,
@@ -38,7 +38,7 @@ impl AssemblyPlan {
         normal: DVec3,
         kp: usize,
         k: usize,
-        phi: &Integrand<'_>,
+        phi: &dyn Integrand,
         out: &mut [f64],
     ) -> u64 {
         let occ = self
@@ -59,7 +59,7 @@ impl AssemblyPlan {
                 if cands.iter().any(|&i| clip::blocks(position, q, occ.get(i))) {
                     out.fill(0.0);
                 } else {
-                    phi(k, st, q, out);
+                    phi.eval(k, st, q, out);
                 }
             };
             let whole = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
@@ -118,9 +118,7 @@ impl AssemblyPlan {
         let classes = self.classes.row(kp, 0..n);
         let integrator = self.integrator();
         let disc = &*self.disc;
-        let phi = |k: usize, st: [f64; 2], _q: DVec3, out: &mut [f64]| {
-            disc.nodes_of(k).eval_basis(st[0], st[1], out)
-        };
+        let phi = LagrangeBasis(disc);
         let fill = BlockFill {
             plan: self,
             kp,
@@ -194,9 +192,7 @@ impl AssemblyPlan {
         let ncols = cols.len();
         debug_assert_eq!(out.len(), rows.len() * ncols);
         let integrator = self.integrator();
-        let phi = |k: usize, st: [f64; 2], _q: DVec3, out: &mut [f64]| {
-            disc.nodes_of(k).eval_basis(st[0], st[1], out)
-        };
+        let phi = LagrangeBasis(disc);
         let first_row = self.rows().offset(kp);
         let fill = BlockFill {
             plan: self,
