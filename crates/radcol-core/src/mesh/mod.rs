@@ -7,12 +7,13 @@
 //! theorems 7 and 9 require.
 
 mod base;
+mod frames;
 pub mod grading;
 mod locate;
 
 pub use locate::{Located, Locator};
 
-use crate::geometry::{FrameBatch, Surface, SurfaceMap, FRAME_BATCH};
+use crate::geometry::{Surface, SurfaceMap};
 use glam::DVec3;
 use grading::Grading;
 use std::sync::Arc;
@@ -266,27 +267,6 @@ impl Mesh {
             normal: cross / jacobian,
             jacobian,
         }
-    }
-
-    /// [`point`](Self::point) at the batch's (s, t), given in `b.x[0]` and
-    /// `b.x[1]` (overwritten by the parameter points), for the whole batch
-    /// in one call of the surface map (the rule points of near and self
-    /// pairs).
-    pub fn frames(&self, k: usize, b: &mut FrameBatch) {
-        let [a, p1, p2] = self.elements[k].param.map(|p| p.to_array());
-        let (u, v) = (
-            [0, 1, 2].map(|j| p1[j] - a[j]),
-            [0, 1, 2].map(|j| p2[j] - a[j]),
-        );
-        let [xs, xt, xz] = &mut b.x;
-        for i in 0..b.len.min(FRAME_BATCH) {
-            let (s, t) = (xs[i], xt[i]);
-            xs[i] = a[0] + u[0] * s + v[0] * t;
-            xt[i] = a[1] + u[1] * s + v[1] * t;
-            xz[i] = a[2] + u[2] * s + v[2] * t;
-        }
-        self.map_of(k)
-            .frame_batch(b, DVec3::from_array(u), DVec3::from_array(v));
     }
 
     /// The [`Site`] at (s, t) of element `k` (for evaluating fields).
