@@ -11,7 +11,9 @@
 use super::{ElementMap, FieldPoint};
 use crate::discretization::Discretization;
 use crate::geometry::{FrameBatch, FRAME_BATCH};
+use crate::quadrature::TriangleRule;
 use glam::DVec3;
+use std::f64::consts::FRAC_1_PI;
 
 /// The factor φ of an integrand G(P, Q) φ(Q): given element k, (s, t) and
 /// the point Q = m_k(s, t), its `m` values. Any
@@ -99,6 +101,30 @@ impl PointBatch {
         let i = self.frames.len;
         (self.st[0][i], self.st[1][i], self.weight[i]) = (s, t, weight);
         self.frames.len += 1;
+    }
+
+    /// Takes `rule`'s points on the sub-triangle `tri` of element `k` a
+    /// batch at a time: evaluates each batch ([`evaluate`](Self::evaluate))
+    /// and hands it to `add`.
+    pub(super) fn for_rule(
+        &mut self,
+        (map, k, phi): (&ElementMap<'_>, usize, &dyn Integrand),
+        rule: &TriangleRule,
+        [a, b, c]: [[f64; 2]; 3],
+        mut add: impl FnMut(&mut Self),
+    ) {
+        let (e1, e2) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
+        let scale = (e1[0] * e2[1] - e1[1] * e2[0]).abs() * FRAC_1_PI;
+        let batches = rule.points.chunks(FRAME_BATCH);
+        for (xys, ws) in batches.zip(rule.weights.chunks(FRAME_BATCH)) {
+            self.clear();
+            for (&[x, y], &w) in xys.iter().zip(ws) {
+                let st = [a[0] + x * e1[0] + y * e2[0], a[1] + x * e1[1] + y * e2[1]];
+                self.push(st, w * scale);
+            }
+            self.evaluate(map, k, phi);
+            add(self);
+        }
     }
 
     /// The surface point and φ at every point of the batch, and the weights

@@ -13,7 +13,6 @@
 //!   P and each is integrated in Duffy coordinates collapsed at P, where the
 //!   bounded, direction-dependent kernel of a curved surface becomes smooth.
 
-use crate::geometry::FRAME_BATCH;
 use crate::mesh::Mesh;
 use crate::quadrature::{RuleLadder, TriangleRule, MAX_RULE_DEGREE};
 use batch::PointBatch;
@@ -271,19 +270,7 @@ impl<'a> ElementIntegrator<'a> {
             return rule.len() as u64;
         }
         let mut batch = PointBatch::new(out.len());
-        for (xys, ws) in rule
-            .points
-            .chunks(FRAME_BATCH)
-            .zip(rule.weights.chunks(FRAME_BATCH))
-        {
-            batch.clear();
-            for (&[x, y], &w) in xys.iter().zip(ws) {
-                let st = [a[0] + x * e1[0] + y * e2[0], a[1] + x * e1[1] + y * e2[1]];
-                batch.push(st, w * det * FRAC_1_PI);
-            }
-            batch.evaluate(&map, k, phi);
-            batch.add(p, out);
-        }
+        batch.for_rule((&map, k, phi), rule, tri, |b| b.add(p, out));
         rule.len() as u64
     }
 

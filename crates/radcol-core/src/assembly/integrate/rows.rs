@@ -15,10 +15,8 @@
 
 use super::batch::PointBatch;
 use super::{far_degree, piece_ball, ElementIntegrator, FieldPoint, Integrand};
-use crate::geometry::FRAME_BATCH;
 use crate::quadrature::MAX_RULE_DEGREE;
 use std::cell::RefCell;
-use std::f64::consts::FRAC_1_PI;
 
 /// A sub-triangle of σ.
 type Tri = [[f64; 2]; 3];
@@ -117,26 +115,13 @@ impl ElementIntegrator<'_> {
         out: &mut [f64],
     ) -> u64 {
         let rule = self.ladder.rule(degree);
-        let [a, b, c] = tri;
-        let (e1, e2) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
-        let det = (e1[0] * e2[1] - e1[1] * e2[0]).abs();
         let map = self.element_map(w.k);
         let mut batch = w.batch.borrow_mut();
-        for (xys, wts) in rule
-            .points
-            .chunks(FRAME_BATCH)
-            .zip(rule.weights.chunks(FRAME_BATCH))
-        {
-            batch.clear();
-            for (&[x, y], &wt) in xys.iter().zip(wts) {
-                let st = [a[0] + x * e1[0] + y * e2[0], a[1] + x * e1[1] + y * e2[1]];
-                batch.push(st, wt * det * FRAC_1_PI);
-            }
-            batch.evaluate(&map, w.k, w.phi);
+        batch.for_rule((&map, w.k, w.phi), rule, tri, |b| {
             for &i in rows {
-                batch.add(&w.ps[i], &mut out[i * w.m..(i + 1) * w.m]);
+                b.add(&w.ps[i], &mut out[i * w.m..(i + 1) * w.m]);
             }
-        }
+        });
         (rule.len() * rows.len()) as u64
     }
 }
