@@ -81,14 +81,14 @@ impl FrameBatch {
     #[inline]
     fn set(&mut self, i: usize, position: DVec3, cross: DVec3) {
         let jacobian = cross.length();
-        let inv = 1.0 / jacobian;
-        for (c, (p, n)) in [(position, cross)]
-            .iter()
-            .flat_map(|(p, n)| [(p.x, n.x), (p.y, n.y), (p.z, n.z)])
+        let normal = cross / jacobian;
+        for (c, (p, n)) in position
+            .to_array()
+            .into_iter()
+            .zip(normal.to_array())
             .enumerate()
         {
-            self.position[c][i] = p;
-            self.normal[c][i] = n * inv;
+            (self.position[c][i], self.normal[c][i]) = (p, n);
         }
         self.jacobian[i] = jacobian;
     }

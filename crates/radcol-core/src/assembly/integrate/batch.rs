@@ -11,6 +11,7 @@
 use super::{ElementMap, FieldPoint};
 use crate::discretization::Discretization;
 use crate::geometry::{FrameBatch, FRAME_BATCH};
+use crate::kernel::g;
 use crate::quadrature::TriangleRule;
 use glam::DVec3;
 use std::f64::consts::FRAC_1_PI;
@@ -139,13 +140,11 @@ impl PointBatch {
                 mesh.frames(k, f);
             }
             ElementMap::Affine(v0, es, et, q0) => {
+                let normal = q0.normal.to_array();
                 for i in 0..n {
                     let x = v0 + es * self.st[0][i] + et * self.st[1][i];
-                    for (j, (p, nq)) in [(x.x, q0.normal.x), (x.y, q0.normal.y), (x.z, q0.normal.z)]
-                        .into_iter()
-                        .enumerate()
-                    {
-                        (f.position[j][i], f.normal[j][i]) = (p, nq);
+                    for (c, p) in x.to_array().into_iter().enumerate() {
+                        (f.position[c][i], f.normal[c][i]) = (p, normal[c]);
                     }
                     f.jacobian[i] = q0.jacobian;
                 }
@@ -156,6 +155,12 @@ impl PointBatch {
         }
         let (s, t) = (&self.st[0][..n], &self.st[1][..n]);
         phi.eval_batch(k, s, t, f, &mut self.basis);
+        // The slots up to the next multiple of 4 enter the sums with weight
+        // 0; a value left there by an earlier batch could be infinite.
+        let padded = n.div_ceil(4) * 4;
+        for j in 0..self.m {
+            self.basis[j * FRAME_BATCH + n..j * FRAME_BATCH + padded].fill(0.0);
+        }
     }
 
     /// Adds Σ_i G(P, Q_i) w_i φ_j(Q_i) to `out[j]` for every factor j.
@@ -164,18 +169,9 @@ impl PointBatch {
         // Sums run over whole groups of four, the slots past n weighing 0.
         let padded = n.div_ceil(4) * 4;
         let f = &self.frames;
-        let ([px, py, pz], [nx, ny, nz]) = (p.position.to_array(), p.normal.to_array());
         for i in 0..n {
-            let d = [
-                f.position[0][i] - px,
-                f.position[1][i] - py,
-                f.position[2][i] - pz,
-            ];
-            let a = (d[0] * nx + d[1] * ny + d[2] * nz).max(0.0);
-            let b =
-                (-(d[0] * f.normal[0][i] + d[1] * f.normal[1][i] + d[2] * f.normal[2][i])).max(0.0);
-            let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-            self.gw[i] = a * b / (r2 * r2) * self.weight[i];
+            let (q, n_q, _) = f.get(i);
+            self.gw[i] = g(p.position, p.normal, q, n_q) * self.weight[i];
         }
         self.gw[n..padded].fill(0.0);
         for (j, o) in out[..self.m].iter_mut().enumerate() {

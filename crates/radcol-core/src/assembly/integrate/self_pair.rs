@@ -236,7 +236,8 @@ impl ElementIntegrator<'_> {
             let x = v0 + (v1 - v0) * x;
             // sinh and cosh from one exponential (v's absolute error stays
             // at rounding: it is an offset, not a relative quantity).
-            let (e, inv_e) = (x.exp(), (-x).exp());
+            let e = x.exp();
+            let inv_e = 1.0 / e;
             let v = d.foot + d.delta * (0.5 * (e - inv_e));
             let cosh = 0.5 * (e + inv_e);
             let wv = wx * d.delta * cosh * (u1 - u0) * (v1 - v0) * d.det * FRAC_1_PI;
