@@ -16,6 +16,10 @@ use crate::quadrature::{collapsed::collapsed_rule, monomial_integral};
 /// Largest polynomial degree supported.
 pub const MAX_DEGREE: usize = 6;
 
+/// 1/m for m = 1..=MAX_DEGREE (the basis recurrences multiply by it rather
+/// than divide: they run at every rule point of the near and self pairs).
+const INV_M: [f64; MAX_DEGREE + 1] = [0.0, 1.0, 0.5, 1.0 / 3.0, 0.25, 0.2, 1.0 / 6.0];
+
 /// Lattice step 1/`LEBESGUE_GRID` of the samples that locate Λ's maximum.
 const LEBESGUE_GRID: usize = 240;
 
@@ -170,12 +174,11 @@ impl NodeSet {
         let lt = (t - self.alpha) * scale;
         let lu = R as f64 - ls - lt;
         // P_m(λ) for m = 0..=R at the three (scaled) coordinates.
-        const INV: [f64; MAX_DEGREE + 1] = [0.0, 1.0, 0.5, 1.0 / 3.0, 0.25, 0.2, 1.0 / 6.0];
         let table = |x: f64| {
             let mut p = [0.0; MAX_DEGREE + 1];
             p[0] = 1.0;
             for m in 1..=R {
-                p[m] = p[m - 1] * (x - (m - 1) as f64) * INV[m];
+                p[m] = p[m - 1] * (x - (m - 1) as f64) * INV_M[m];
             }
             p
         };
@@ -210,7 +213,6 @@ impl NodeSet {
         stride: usize,
     ) {
         const CHUNK: usize = 32;
-        const INV: [f64; MAX_DEGREE + 1] = [0.0, 1.0, 0.5, 1.0 / 3.0, 0.25, 0.2, 1.0 / 6.0];
         let scale = R as f64 / (1.0 - 3.0 * self.alpha);
         // P_m(λ) for m = 0..=R at the three scaled coordinates of each point.
         let mut tables = [[[0.0f64; CHUNK]; R1]; 3];
@@ -227,7 +229,7 @@ impl NodeSet {
                 for m in 2..=R {
                     let (lo, hi) = table.split_at_mut(m);
                     for i in 0..n {
-                        hi[0][i] = lo[m - 1][i] * (lo[1][i] - (m - 1) as f64) * INV[m];
+                        hi[0][i] = lo[m - 1][i] * (lo[1][i] - (m - 1) as f64) * INV_M[m];
                     }
                 }
             }
