@@ -1,10 +1,11 @@
 //! The hierarchical matrix against the dense one on the Cornell box refined
 //! by --max-edge (r = 1, occluded: partly visible blocks are subdivided to
 //! dense leaves, culled blocks are zero), or on the empty room by level:
-//! unknowns, build seconds, numbers stored, product seconds, and the
-//! product's error against the dense matrix where that fits (`DENSE_CAP`
-//! unknowns); then the exponents of storage and product time against N
-//! fitted over the run. Wall-clock
+//! unknowns, build seconds, numbers stored (and by the kind of leaf that
+//! stores them), product seconds, and the product's error against the dense
+//! matrix where that fits (`DENSE_CAP` unknowns); then the exponents of
+//! storage (all, and by kind) and product time against N fitted over the
+//! run. Wall-clock
 //! figures of one run: compare them as ratios within it.
 //!
 //!     cargo run --release -p radcol-benches --example hmatrix [-- TOL [EDGE ...]]
@@ -63,6 +64,7 @@ fn main() {
         "     N   build s   stored   of dense   matvec s   dense asm s   dense matvec s   error"
     );
     let (mut storage, mut times) = (Vec::new(), Vec::new());
+    let mut by_kind: [Vec<(f64, f64)>; 4] = Default::default();
     for h in sizes {
         let mesh = Arc::new(if room {
             Mesh::new(surface.clone(), h as u32)
@@ -113,6 +115,18 @@ fn main() {
             s.stored as f64 / 1e6,
             s.compression()
         );
+        let by = s.stored_by_kind;
+        let kinds = [by.low_rank, by.left_dense, by.split, by.near];
+        println!(
+            "        numbers by kind: low rank {:.1}M, admissible left dense {:.1}M, split at shadows or tangent planes {:.1}M, near the diagonal {:.1}M",
+            kinds[0] as f64 / 1e6,
+            kinds[1] as f64 / 1e6,
+            kinds[2] as f64 / 1e6,
+            kinds[3] as f64 / 1e6
+        );
+        for (fits, k) in by_kind.iter_mut().zip(kinds) {
+            fits.push((n as f64, k.max(1) as f64));
+        }
         storage.push((n as f64, s.stored as f64));
         times.push((n as f64, matvec));
     }
@@ -121,6 +135,13 @@ fn main() {
             "fitted exponents against N: storage {:.2}, matvec time {:.2} (dense: 2)",
             fit(&storage),
             fit(&times)
+        );
+        println!(
+            "  by kind: low rank {:.2}, admissible left dense {:.2}, split {:.2}, near {:.2}",
+            fit(&by_kind[0]),
+            fit(&by_kind[1]),
+            fit(&by_kind[2]),
+            fit(&by_kind[3])
         );
     }
 }

@@ -12,8 +12,9 @@
 use radcol_core::assembly::{AssemblyBackend, AssemblyPlan, CpuBackend, QuadratureOptions};
 use radcol_core::discretization::Discretization;
 use radcol_core::geometry::Surface;
+use radcol_core::hmatrix::cluster::Aabb;
 use radcol_core::hmatrix::radiosity::{self, PlanEntries};
-use radcol_core::hmatrix::{HMatrix, HOptions};
+use radcol_core::hmatrix::{Entries, HMatrix, HOptions, Structure};
 use radcol_core::matrix::DenseMatrix;
 use radcol_core::mesh::Mesh;
 use radcol_core::nodes::NodeSet;
@@ -268,6 +269,65 @@ fn assert_closed(name: &str, c: &Case) {
 #[test]
 fn cornell_compressed_against_dense() {
     check("cornell", &case(scene("cornell"), 0, Some(120.0)));
+}
+
+/// The plan's entries with every block admissible by distance taken as
+/// smooth: shadows and tangent planes ignored (a wrong matrix near them,
+/// built here only for its block structure).
+struct AllSmooth<'a>(&'a PlanEntries<'a>);
+
+impl Structure for AllSmooth<'_> {
+    fn is_zero(&self, rows: &[usize], row_box: &Aabb, cols: &[usize], col_box: &Aabb) -> bool {
+        self.0.is_zero(rows, row_box, cols, col_box)
+    }
+
+    fn zero_lines(&self, rows: &[usize], cols: &[usize]) -> (Vec<bool>, Vec<bool>) {
+        self.0.zero_lines(rows, cols)
+    }
+}
+
+impl Entries for AllSmooth<'_> {
+    fn block(&self, rows: &[usize], cols: &[usize], out: &mut [f64]) {
+        self.0.block(rows, cols, out)
+    }
+
+    fn column_group(&self, j: usize) -> std::ops::Range<usize> {
+        self.0.column_group(j)
+    }
+}
+
+/// Where the stored numbers are (the report's shares): the four kinds add
+/// up to all stored; the leaves near the diagonal are those of the same
+/// build with every block taken as smooth, which splits nothing; and on the
+/// Cornell box the blocks split at shadows hold numbers.
+#[test]
+fn stored_numbers_by_kind() {
+    let surface = scene("cornell");
+    let vis = visibility::analyze(&surface);
+    let mesh = Arc::new(Mesh::with_max_edge(surface, 0, 150.0));
+    let disc = Arc::new(Discretization::new(
+        mesh,
+        NodeSet::new(1, 1.0 / 6.0).unwrap(),
+    ));
+    let plan = AssemblyPlan::new(disc, QuadratureOptions::default(), &vis);
+    let entries = PlanEntries::new(&plan);
+    let opts = HOptions::default();
+    let (rows, cols) = entries.boxes();
+    let real = HMatrix::build(&rows, &cols, &entries, &opts).stats();
+    let smooth = HMatrix::build(&rows, &cols, &AllSmooth(&entries), &opts).stats();
+    for s in [real, smooth] {
+        let by = s.stored_by_kind;
+        println!("{by:?} of {}", s.stored);
+        assert_eq!(by.low_rank + by.left_dense + by.split + by.near, s.stored);
+    }
+    assert_eq!(smooth.stored_by_kind.split, 0);
+    assert_eq!(real.stored_by_kind.near, smooth.stored_by_kind.near);
+    assert!(real.stored_by_kind.near > 0);
+    assert!(
+        real.stored_by_kind.split > real.stored / 10,
+        "{:?}",
+        real.stored_by_kind
+    );
 }
 
 /// Products with several vectors at once (the colour channels of one GMRES

@@ -61,7 +61,7 @@ impl fmt::Display for OperatorReport {
             ),
             Some(s) => writeln!(
                 f,
-                "  operator    compressed, {} ({:.2} % of dense), product error {:.1e} at {SAMPLED_ROWS} rows: {} low-rank blocks (max rank {}{}), {} dense, {} zero (shadowed){}; predicted {} from the geometry, {}, {}; {}",
+                "  operator    compressed, {} ({:.2} % of dense), product error {:.1e} at {SAMPLED_ROWS} rows: {} low-rank blocks (max rank {}{}), {} dense, {} zero (shadowed){}; {}; predicted {} from the geometry, {}, {}; {}",
                 gb(self.bytes as f64),
                 100.0 * s.compression(),
                 self.sampled_error.unwrap_or(f64::NAN),
@@ -79,6 +79,7 @@ impl fmt::Display for OperatorReport {
                 } else {
                     String::new()
                 },
+                stored_shares(s),
                 gb(self.predicted_bytes.unwrap_or(f64::NAN)),
                 match self.planned_bytes {
                     Some(b) => format!("{} from the plan", gb(b)),
@@ -98,6 +99,19 @@ impl fmt::Display for OperatorReport {
             ),
         }
     }
+}
+
+/// Where the compressed operator's numbers are, as shares of all it stores.
+fn stored_shares(s: &HStats) -> String {
+    let by = &s.stored_by_kind;
+    let pct = |x: u64| 100.0 * x as f64 / (s.stored as f64).max(1.0);
+    format!(
+        "numbers stored {:.0} % in low-rank blocks, {:.0} % in admissible blocks left dense, {:.0} % in blocks split at shadows or tangent planes, {:.0} % near the diagonal",
+        pct(by.low_rank),
+        pct(by.left_dense),
+        pct(by.split),
+        pct(by.near)
+    )
 }
 
 /// The memory line: the measured peak against the prediction, when the

@@ -120,21 +120,52 @@ pub struct HStats {
     pub max_rank: usize,
     /// Numbers stored (dense entries plus (m + n) k per low-rank block).
     pub stored: u64,
+    /// Where the stored numbers are: low-rank blocks, admissible blocks
+    /// left dense (their cross did not pay), dense leaves of blocks that
+    /// are admissible by distance but were subdivided because the
+    /// structure found them not smooth ([`Structure::smooth`]: for
+    /// radiosity, shadow boundaries and tangent planes), and dense leaves of
+    /// the near field. They add up to `stored`.
+    pub stored_by_kind: StoredByKind,
     /// Leaves taken from a previous matrix ([`reuse`]) instead of computed.
     pub reused_blocks: usize,
 }
 
+/// The numbers of a hierarchical matrix by the kind of leaf that stores
+/// them ([`HStats::stored_by_kind`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct StoredByKind {
+    /// In low-rank blocks.
+    pub low_rank: u64,
+    /// In admissible blocks left dense.
+    pub left_dense: u64,
+    /// In dense leaves of blocks admissible by distance that the structure
+    /// split (not smooth).
+    pub split: u64,
+    /// In dense leaves of the near field (not admissible by distance).
+    pub near: u64,
+}
+
 impl HStats {
     /// What `leaves` hold (`admissible`: which were admissible blocks) in a
-    /// matrix of `shape`.
-    fn of(leaves: &[Leaf], admissible: &[bool], shape: (usize, usize)) -> Self {
+    /// matrix of `shape` whose row and column trees are `rt` and `ct`, its
+    /// admissibility `eta`.
+    fn of(
+        leaves: &[Leaf],
+        admissible: &[bool],
+        shape: (usize, usize),
+        (rt, ct): (&ClusterTree, &ClusterTree),
+        eta: f64,
+    ) -> Self {
         let mut stats = HStats {
             shape,
             ..Default::default()
         };
+        let by = &mut stats.stored_by_kind;
         for (l, &admissible) in leaves.iter().zip(admissible) {
             let (m, n) = (l.rows.len() as u64, l.cols.len() as u64);
-            stats.stored += l.data.stored(l.rows.len(), l.cols.len());
+            let stored = l.data.stored(l.rows.len(), l.cols.len());
+            stats.stored += stored;
             match &l.data {
                 LeafData::Zero => {
                     stats.zero_blocks += 1;
@@ -143,10 +174,22 @@ impl HStats {
                 LeafData::Dense(_) | LeafData::Compact(_) => {
                     stats.dense_blocks += 1;
                     stats.low_rank_failed += admissible as usize;
+                    let (rc, cc) = (
+                        &rt.clusters[l.block.0 as usize],
+                        &ct.clusters[l.block.1 as usize],
+                    );
+                    if admissible {
+                        by.left_dense += stored;
+                    } else if by_distance(rc, cc, eta) {
+                        by.split += stored;
+                    } else {
+                        by.near += stored;
+                    }
                 }
                 LeafData::LowRank(lr) => {
                     stats.low_rank_blocks += 1;
                     stats.max_rank = stats.max_rank.max(lr.rank());
+                    by.low_rank += stored;
                 }
             }
         }
@@ -341,6 +384,13 @@ fn index_bytes(rt: &ClusterTree, ct: &ClusterTree, leaves: usize) -> usize {
         + std::mem::size_of::<Leaf>() * leaves
 }
 
+/// The admissibility by distance of the block of clusters `rc` and `cc`:
+/// min(diam τ, diam σ) ≤ η dist(τ, σ), apart.
+fn by_distance(rc: &cluster::Cluster, cc: &cluster::Cluster, eta: f64) -> bool {
+    let dist = rc.bbox.distance(&cc.bbox);
+    dist > 0.0 && rc.bbox.diameter().min(cc.bbox.diameter()) <= eta * dist
+}
+
 /// Visits the leaves of the block tree under (r, c): (row cluster, column
 /// cluster, admissible), until `visit` breaks. An admissible pair that is
 /// not [`Structure::smooth`] is subdivided like an inadmissible one. A node
@@ -360,9 +410,7 @@ fn block_tree(
         return ControlFlow::Continue(());
     }
     let (rc, cc) = (&rt.clusters[r], &ct.clusters[c]);
-    let dist = rc.bbox.distance(&cc.bbox);
-    if dist > 0.0
-        && rc.bbox.diameter().min(cc.bbox.diameter()) <= eta * dist
+    if by_distance(rc, cc, eta)
         && structure.smooth(
             &rt.order[rc.start..rc.end],
             &rc.bbox,

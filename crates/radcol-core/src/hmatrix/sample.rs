@@ -101,7 +101,9 @@ impl HMatrix {
             .map(|l| l.expect("every block built"))
             .collect();
         let admissible: Vec<bool> = t.blocks.iter().map(|b| b.2).collect();
-        let mut stats = HStats::of(&leaves, &admissible, (row_boxes.len(), col_boxes.len()));
+        let shape = (row_boxes.len(), col_boxes.len());
+        let trees = (&t.trees.rt, &t.trees.ct);
+        let mut stats = HStats::of(&leaves, &admissible, shape, trees, opts.eta);
         stats.reused_blocks = t.reused.iter().flatten().count();
         let h = Self {
             rt: t.trees.rt,
