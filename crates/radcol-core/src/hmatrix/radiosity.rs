@@ -8,10 +8,11 @@ use super::cluster::{boxes, Aabb};
 use super::consecutive_runs;
 use super::reuse::with_elements;
 use super::{Entries, HMatrix, HOptions, HPrediction, SampledSize, Structure};
-use crate::assembly::plan::{AssemblyPlan, PairClass, Unchanged};
+use crate::assembly::plan::{AssemblyPlan, ClassTable, PairClass, Unchanged};
 use crate::discretization::Discretization;
 use glam::DVec3;
 use std::collections::HashMap;
+use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Samples of the plan's matrix, counting kernel evaluations.
@@ -256,22 +257,20 @@ impl PlanEntries<'_> {
         let (row_elems, col_elems) = self.elements(rows, cols);
         let (mut zero_rows, mut culled_in_col) = (Vec::new(), vec![0usize; col_elems.len()]);
         let mut partial = false;
-        let classes = self.plan.classes();
-        if let (Some(&first), Some(&last)) = (col_elems.first(), col_elems.last()) {
-            for &kp in &row_elems {
-                let mut all = true;
-                let mut cols = col_elems.iter().enumerate().peekable();
-                for (run, code) in classes.runs(kp, first..last + 1) {
-                    let class = PairClass::from_code(code);
-                    while let Some((b, _)) = cols.next_if(|&(_, &k)| k < run.end) {
-                        partial |= class == PairClass::Partial;
-                        culled_in_col[b] += (class == PairClass::Culled) as usize;
-                        all &= class == PairClass::Culled;
-                    }
+        let along = ClassesAlong::new(self.plan.classes(), &col_elems);
+        for &kp in &row_elems {
+            let mut all = true;
+            let _ = along.row(kp, |at, class| {
+                partial |= class == PairClass::Partial;
+                if class == PairClass::Culled {
+                    culled_in_col[at].iter_mut().for_each(|c| *c += 1);
+                } else {
+                    all = false;
                 }
-                if all {
-                    zero_rows.push(kp);
-                }
+                ControlFlow::Continue(())
+            });
+            if all {
+                zero_rows.push(kp);
             }
         }
         Culled {
@@ -292,25 +291,62 @@ impl PlanEntries<'_> {
         mut ok: impl FnMut(PairClass) -> bool,
     ) -> bool {
         let (row_elems, col_elems) = self.elements(rows, cols);
-        let (Some(&first), Some(&last)) = (col_elems.first(), col_elems.last()) else {
-            return true;
-        };
-        // Each row's runs over the columns' span, walked beside the sorted
-        // columns: no search per pair.
-        let classes = self.plan.classes();
+        let along = ClassesAlong::new(self.plan.classes(), &col_elems);
         row_elems.iter().all(|&kp| {
-            let mut cols = col_elems.iter().peekable();
-            classes.runs(kp, first..last + 1).all(|(run, code)| {
-                let mut fine = true;
-                while cols.next_if(|&&k| k < run.end).is_some() {
-                    fine = ok(PairClass::from_code(code));
-                    if !fine {
-                        break;
-                    }
-                }
-                fine
-            })
+            along
+                .row(kp, |_, class| match ok(class) {
+                    true => ControlFlow::Continue(()),
+                    false => ControlFlow::Break(()),
+                })
+                .is_continue()
         })
+    }
+}
+
+/// The plan's pair classes of a block's rows against its column elements
+/// (sorted, distinct), read from the class table's runs over each stretch
+/// of consecutive column elements only: a cluster's elements are scattered
+/// over a span of element numbers many times their count, and reading the
+/// runs over the whole span cost most of the block tree's time.
+struct ClassesAlong<'a> {
+    classes: &'a ClassTable,
+    col_elems: &'a [usize],
+    /// Positions in `col_elems` of its stretches of consecutive elements.
+    stretches: Vec<std::ops::Range<usize>>,
+}
+
+impl<'a> ClassesAlong<'a> {
+    fn new(classes: &'a ClassTable, col_elems: &'a [usize]) -> Self {
+        let mut stretches: Vec<std::ops::Range<usize>> = Vec::new();
+        for (b, &k) in col_elems.iter().enumerate() {
+            match stretches.last_mut() {
+                Some(s) if col_elems[s.end - 1] + 1 == k => s.end = b + 1,
+                _ => stretches.push(b..b + 1),
+            }
+        }
+        Self {
+            classes,
+            col_elems,
+            stretches,
+        }
+    }
+
+    /// Row element `kp`'s classes, in order: `f` gets the positions in the
+    /// column elements that share one class, until it breaks.
+    fn row(
+        &self,
+        kp: usize,
+        mut f: impl FnMut(std::ops::Range<usize>, PairClass) -> ControlFlow<()>,
+    ) -> ControlFlow<()> {
+        for s in &self.stretches {
+            let first = self.col_elems[s.start];
+            let span = first..first + s.len();
+            for (run, code) in self.classes.runs(kp, span) {
+                let at = s.start + (run.start - first)..s.start + (run.end - first);
+                f(at, PairClass::from_code(code))?;
+            }
+        }
+        ControlFlow::Continue(())
     }
 }
 
