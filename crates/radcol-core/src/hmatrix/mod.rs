@@ -18,6 +18,7 @@
 //! matrix in tests, the assembly's integrators in production.
 
 pub mod aca;
+mod classes;
 pub mod cluster;
 mod leaf;
 mod predict;

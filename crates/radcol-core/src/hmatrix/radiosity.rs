@@ -4,11 +4,12 @@
 //! pairs, exact clipping of partly visible pairs), blocks whose element pairs
 //! the plan culled (facing away, or hidden) zero without a kernel call.
 
+use super::classes::ClassesAlong;
 use super::cluster::{boxes, Aabb};
 use super::consecutive_runs;
 use super::reuse::with_elements;
 use super::{Entries, HMatrix, HOptions, HPrediction, SampledSize, Structure};
-use crate::assembly::plan::{AssemblyPlan, ClassTable, PairClass, Unchanged};
+use crate::assembly::plan::{AssemblyPlan, PairClass, Unchanged};
 use crate::discretization::Discretization;
 use glam::DVec3;
 use std::collections::HashMap;
@@ -300,53 +301,6 @@ impl PlanEntries<'_> {
                 })
                 .is_continue()
         })
-    }
-}
-
-/// The plan's pair classes of a block's rows against its column elements
-/// (sorted, distinct), read from the class table's runs over each stretch
-/// of consecutive column elements only: a cluster's elements are scattered
-/// over a span of element numbers many times their count, and reading the
-/// runs over the whole span cost most of the block tree's time.
-struct ClassesAlong<'a> {
-    classes: &'a ClassTable,
-    col_elems: &'a [usize],
-    /// Positions in `col_elems` of its stretches of consecutive elements.
-    stretches: Vec<std::ops::Range<usize>>,
-}
-
-impl<'a> ClassesAlong<'a> {
-    fn new(classes: &'a ClassTable, col_elems: &'a [usize]) -> Self {
-        let mut stretches: Vec<std::ops::Range<usize>> = Vec::new();
-        for (b, &k) in col_elems.iter().enumerate() {
-            match stretches.last_mut() {
-                Some(s) if col_elems[s.end - 1] + 1 == k => s.end = b + 1,
-                _ => stretches.push(b..b + 1),
-            }
-        }
-        Self {
-            classes,
-            col_elems,
-            stretches,
-        }
-    }
-
-    /// Row element `kp`'s classes, in order: `f` gets the positions in the
-    /// column elements that share one class, until it breaks.
-    fn row(
-        &self,
-        kp: usize,
-        mut f: impl FnMut(std::ops::Range<usize>, PairClass) -> ControlFlow<()>,
-    ) -> ControlFlow<()> {
-        for s in &self.stretches {
-            let first = self.col_elems[s.start];
-            let span = first..first + s.len();
-            for (run, code) in self.classes.runs(kp, span) {
-                let at = s.start + (run.start - first)..s.start + (run.end - first);
-                f(at, PairClass::from_code(code))?;
-            }
-        }
-        ControlFlow::Continue(())
     }
 }
 
