@@ -50,7 +50,7 @@ impl<'a> ClassesAlong<'a> {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "scenes"))]
 mod tests {
     use super::*;
     use crate::assembly::plan::AssemblyPlan;
