@@ -50,22 +50,24 @@ impl<'a> ClassesAlong<'a> {
     }
 }
 
-#[cfg(all(test, feature = "scenes"))]
+#[cfg(test)]
 mod tests {
-    use super::*;
-    use crate::assembly::plan::AssemblyPlan;
-    use crate::assembly::QuadratureOptions;
-    use crate::discretization::Discretization;
-    use crate::mesh::Mesh;
-    use crate::nodes::NodeSet;
-    use crate::scene::builtin;
-    use crate::visibility;
-    use std::sync::Arc;
-
-    /// On the Cornell box (every class present), the classes read along
-    /// scattered column elements are each pair's own class, in order.
+    /// On the Cornell box (culled, partly visible and far pairs), the
+    /// classes read along scattered column elements are each pair's own
+    /// class, in order.
     #[test]
+    #[cfg(feature = "scenes")]
     fn classes_along_scattered_columns_are_the_pairs_classes() {
+        use super::*;
+        use crate::assembly::plan::AssemblyPlan;
+        use crate::assembly::QuadratureOptions;
+        use crate::discretization::Discretization;
+        use crate::mesh::Mesh;
+        use crate::nodes::NodeSet;
+        use crate::scene::builtin;
+        use crate::visibility;
+        use std::sync::Arc;
+
         let surface = builtin("cornell").unwrap().unwrap().surface.clone();
         let vis = visibility::analyze(&surface);
         let mesh = Arc::new(Mesh::with_max_edge(surface, 0, 200.0));
