@@ -1,5 +1,6 @@
 //! The plan's pair classes of a block, read for the block tree.
 
+use super::consecutive_runs;
 use crate::assembly::plan::{ClassTable, PairClass};
 use std::ops::{ControlFlow, Range};
 
@@ -10,24 +11,15 @@ use std::ops::{ControlFlow, Range};
 /// runs over the whole span cost most of the block tree's time.
 pub(super) struct ClassesAlong<'a> {
     classes: &'a ClassTable,
-    col_elems: &'a [usize],
-    /// Positions in `col_elems` of its stretches of consecutive elements.
+    /// The stretches of consecutive column elements ([`consecutive_runs`]).
     stretches: Vec<Range<usize>>,
 }
 
 impl<'a> ClassesAlong<'a> {
-    pub(super) fn new(classes: &'a ClassTable, col_elems: &'a [usize]) -> Self {
-        let mut stretches: Vec<Range<usize>> = Vec::new();
-        for (b, &k) in col_elems.iter().enumerate() {
-            match stretches.last_mut() {
-                Some(s) if col_elems[s.end - 1] + 1 == k => s.end = b + 1,
-                _ => stretches.push(b..b + 1),
-            }
-        }
+    pub(super) fn new(classes: &'a ClassTable, col_elems: &[usize]) -> Self {
         Self {
             classes,
-            col_elems,
-            stretches,
+            stretches: consecutive_runs(col_elems),
         }
     }
 
@@ -38,13 +30,14 @@ impl<'a> ClassesAlong<'a> {
         kp: usize,
         mut f: impl FnMut(Range<usize>, PairClass) -> ControlFlow<()>,
     ) -> ControlFlow<()> {
+        // Position in the column elements of the stretch's first.
+        let mut at = 0;
         for s in &self.stretches {
-            let first = self.col_elems[s.start];
-            let span = first..first + s.len();
-            for (run, code) in self.classes.runs(kp, span) {
-                let at = s.start + (run.start - first)..s.start + (run.end - first);
-                f(at, PairClass::from_code(code))?;
+            for (run, code) in self.classes.runs(kp, s.clone()) {
+                let local = at + (run.start - s.start)..at + (run.end - s.start);
+                f(local, PairClass::from_code(code))?;
             }
+            at += s.len();
         }
         ControlFlow::Continue(())
     }
