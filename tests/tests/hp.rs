@@ -358,7 +358,7 @@ const GAIN: f64 = 1.1;
 /// occluder's few elements included), for comparison with the cheapest
 /// mesh of its degree (`cargo test --release -p radcol-tests --test
 /// integration hp::study -- --ignored --nocapture`, a minute; the figures
-/// are the README's).
+/// are docs/accuracy.md's).
 #[test]
 #[ignore]
 fn study() {

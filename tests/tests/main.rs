@@ -1,5 +1,5 @@
 //! radcol's cross-crate tests, one integration binary (CI links once): each
-//! module is one claim of the README's verification table. The end-to-end
+//! module is one claim of the verification table in docs/verification.md. The end-to-end
 //! tests of the `radcol` command live with it (`crates/radcol-cli/tests/cli.rs`),
 //! where cargo builds the binary they run.
 //!

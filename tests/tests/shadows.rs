@@ -315,7 +315,7 @@ fn compressed_steps_take_untouched_blocks_and_reach_the_target() {
 }
 
 /// Uniform refinement of the same family up to level 5 (18 432 unknowns),
-/// the figures behind the README's comparison at 1e-3 (slow: `cargo test
+/// the figures behind docs/accuracy.md's comparison at 1e-3 (slow: `cargo test
 /// --release -p radcol-tests --test integration shadows::uniform -- --ignored
 /// --nocapture`; the default test compares with level 4).
 #[test]
@@ -350,7 +350,7 @@ fn uniform_refinement_of_the_shadow_family() {
 /// seconds of all steps up to it, and the estimate's effectivity at every
 /// step (slow, minutes: `cargo test --release -p radcol-tests --test
 /// integration shadows::to_1e_4 -- --ignored --nocapture`; the figures are
-/// the README's).
+/// docs/accuracy.md's).
 #[test]
 #[ignore]
 fn to_1e_4_on_the_shadow_family() {

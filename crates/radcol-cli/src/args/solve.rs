@@ -67,7 +67,7 @@ pub struct SolveArgs {
     /// degree where its error fell as for a smooth u when it last changed, and split with
     /// its children one degree lower where it fell as at a shadow or contact line (degrees
     /// 1..=4). Fewer unknowns and less memory; faster with --solver lu, usually slower
-    /// with GMRES (README, "--hp"). CPU backend.
+    /// with GMRES (docs/accuracy.md, "--hp"). CPU backend.
     #[arg(help_heading = "Accuracy", long, requires = "target_error")]
     pub hp: bool,
 

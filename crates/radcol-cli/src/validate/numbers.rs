@@ -7,7 +7,7 @@ use radcol_core::nodes::{check_alpha, check_degree};
 use std::ops::RangeInclusive;
 
 /// The degree of `radcol solve --target-error` when `--degree` is not given.
-/// Measured, adaptive runs to 1e-2, 1e-3 and 1e-4 (README, "Which degree
+/// Measured, adaptive runs to 1e-2, 1e-3 and 1e-4 (docs/accuracy.md, "Which degree
 /// with a target"): on the Cornell box r = 2 reached 1e-3 with 6 078
 /// unknowns against 6 963 at r = 1 and 7 640 at r = 3, and 1e-4 in about
 /// 10 minutes, where r = 1 ran out of memory and r = 3 was at 3.3e-4 after 7

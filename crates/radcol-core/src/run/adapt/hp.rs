@@ -27,7 +27,7 @@
 //! Elements where u_n < 0 are never raised (a higher degree rings more at
 //! a contact line), nor beyond [`HP_MAX_DEGREE`].
 //!
-//! Measured (README, "`--hp`"): the thresholds were swept on the shadowed
+//! Measured (docs/accuracy.md, "`--hp`"): the thresholds were swept on the shadowed
 //! floor and the Cornell box to 1e-3 (2^{−r/2} and 0.6 lie in the flat
 //! part of both). The loop reaches the targets with 1.06–1.5× fewer
 //! unknowns than at one degree, but in less wall time only with LU (whose
