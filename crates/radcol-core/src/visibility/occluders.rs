@@ -197,23 +197,48 @@ impl Occluders {
         if self.tris.is_empty() {
             return;
         }
-        let (lo, hi) = bounds(pts.iter().copied());
-        let pad = 1e-5 * self.scale;
-        let query = Aabb::new(to_f32(lo - pad), to_f32(hi + pad));
-        let mut hull: Option<HullAxes> = None;
         let tol = REL_TOL * self.scale;
-        self.bvh.aabb_traverse(query, |bvh, node_index| {
-            let node = &bvh.nodes[node_index as usize];
-            for slot in node.first_index..node.first_index + node.prim_count {
-                let i = bvh.primitive_indices[slot as usize];
-                if self.meets_hull(i, pts, own_planes, witnesses, &mut hull, tol) {
-                    out.push(i);
+        let facets = Facets::new(pts, tol);
+        let mut hull: Option<HullAxes> = None;
+        // The BVH walked against the hull itself, not only its bounding
+        // box: the hull of two elements far apart is a thin slab across
+        // its box, and a mesh inside the box is mostly beside the slab.
+        let mut stack = vec![0u32];
+        while let Some(id) = stack.pop() {
+            let node = &self.bvh.nodes[id as usize];
+            let (lo, hi) = (node.aabb().min, node.aabb().max);
+            let (lo, hi) = (to_f64(lo), to_f64(hi));
+            match facets.classify(lo, hi) {
+                Place::Outside => continue,
+                Place::Inside => self.push_subtree(id, out),
+                Place::Across if node.is_leaf() => {
+                    for slot in node.first_index..node.first_index + node.prim_count {
+                        let i = self.bvh.primitive_indices[slot as usize];
+                        if self.meets_hull(i, pts, own_planes, witnesses, &mut hull, tol) {
+                            out.push(i);
+                        }
+                    }
                 }
+                Place::Across => stack.extend([node.first_index, node.first_index + 1]),
             }
-            true
-        });
+        }
         out.sort_unstable();
         out.dedup();
+    }
+
+    /// Every primitive below BVH node `id` (a node strictly inside the
+    /// hull: each of its triangles meets the hull's interior).
+    fn push_subtree(&self, id: u32, out: &mut Vec<u32>) {
+        let mut stack = vec![id];
+        while let Some(id) = stack.pop() {
+            let node = &self.bvh.nodes[id as usize];
+            if node.is_leaf() {
+                let slots = node.first_index..node.first_index + node.prim_count;
+                out.extend(slots.map(|slot| self.bvh.primitive_indices[slot as usize]));
+            } else {
+                stack.extend([node.first_index, node.first_index + 1]);
+            }
+        }
     }
 
     /// The exact test of occluder `i` against the interior of conv(`pts`).
@@ -266,6 +291,88 @@ pub(crate) fn crosses(p: DVec3, q: DVec3, t: &Occluder, tol: f64) -> bool {
         // Signed distance of x from the edge line, inside positive.
         e.cross(x - u).dot(t.normal) > tol * e.length()
     })
+}
+
+fn to_f64(v: Vec3A) -> DVec3 {
+    DVec3::new(v.x as f64, v.y as f64, v.z as f64)
+}
+
+/// Where a box lies against a convex hull.
+enum Place {
+    /// Beyond one of its planes by more than the tolerance: no point of
+    /// the box meets the hull's interior.
+    Outside,
+    /// Strictly inside every facet by more than the tolerance.
+    Inside,
+    /// Neither decided.
+    Across,
+}
+
+/// The facet planes of the convex hull of a few points (n·x ≤ d inside,
+/// n unit), found among the planes through every triple of them; with
+/// fewer than four the hull is flat, and no box is said to be inside it.
+struct Facets {
+    planes: Vec<(DVec3, f64)>,
+    lo: DVec3,
+    hi: DVec3,
+    tol: f64,
+}
+
+impl Facets {
+    fn new(pts: &[DVec3], tol: f64) -> Self {
+        let m = pts.len();
+        let mut planes = Vec::new();
+        for i in 0..m {
+            for j in i + 1..m {
+                for k in j + 1..m {
+                    let n = (pts[j] - pts[i]).cross(pts[k] - pts[i]);
+                    let len = n.length();
+                    if len.is_nan() || len <= 0.0 {
+                        continue;
+                    }
+                    let n = n / len;
+                    let d = pts[i].dot(n);
+                    let side = |q: &DVec3| q.dot(n) - d;
+                    let (below, above) = pts.iter().fold((false, false), |(b, a), q| {
+                        (b || side(q) < -tol, a || side(q) > tol)
+                    });
+                    match (below, above) {
+                        (true, false) => planes.push((n, d)),
+                        (false, true) => planes.push((-n, -d)),
+                        _ => {}
+                    }
+                }
+            }
+        }
+        let (lo, hi) = bounds(pts.iter().copied());
+        Self {
+            planes,
+            lo,
+            hi,
+            tol,
+        }
+    }
+
+    fn classify(&self, lo: DVec3, hi: DVec3) -> Place {
+        let t = self.tol;
+        if lo.cmpgt(self.hi + t).any() || hi.cmplt(self.lo - t).any() {
+            return Place::Outside;
+        }
+        let (c, e) = ((lo + hi) / 2.0, (hi - lo) / 2.0);
+        let mut inside = self.planes.len() >= 4;
+        for &(n, d) in &self.planes {
+            let (mid, half) = (c.dot(n) - d, e.dot(n.abs()));
+            if mid - half > t {
+                return Place::Outside;
+            }
+            inside &= mid + half < -t;
+        }
+        if inside {
+            Place::Inside
+        } else {
+            Place::Across
+        }
+    }
 }
 
 fn to_f32(v: DVec3) -> Vec3A {
@@ -415,6 +522,63 @@ mod tests {
             occ.candidates(&pts, &[(a[0], DVec3::Z), (b[0], -DVec3::Z)], &mut out);
             assert_eq!(out, vec![2], "scale {s}");
         }
+    }
+
+    /// Walking the BVH against the hull's facets (boxes beyond one skipped,
+    /// boxes strictly inside taken whole) finds exactly the triangles that
+    /// the exact test finds among all of them, on a dense cloud of small
+    /// triangles where both kinds of box occur.
+    #[test]
+    fn the_hull_walk_finds_what_testing_every_triangle_finds() {
+        let mut state = 0x853c49e6748fea9bu64;
+        let mut rnd = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut p = || DVec3::new(rnd(), rnd(), rnd());
+        let tris: Vec<[DVec3; 3]> = (0..2000)
+            .map(|_| {
+                let c = p();
+                let d = [p(), p(), p()];
+                d.map(|x| c + (x - DVec3::splat(0.5)) * 0.05)
+            })
+            .collect();
+        let occ = Occluders::new(&tris);
+        let tol = REL_TOL * occ.scale();
+        let (mut found, mut inside_boxes) = (0, 0);
+        for case in 0..60 {
+            let a = [p(), p(), p()];
+            let b = [p(), p(), p()];
+            let pts = [a[0], a[1], a[2], b[0], b[1], b[2]];
+            let planes = [
+                (a[0], (a[1] - a[0]).cross(a[2] - a[0]).normalize()),
+                (b[0], (b[1] - b[0]).cross(b[2] - b[0]).normalize()),
+            ];
+            let mut walked = Vec::new();
+            occ.candidates(&pts, &planes, &mut walked);
+            let mut hull = None;
+            let every: Vec<u32> = (0..occ.len() as u32)
+                .filter(|&i| occ.meets_hull(i, &pts, &planes, &[], &mut hull, tol))
+                .collect();
+            assert_eq!(walked, every, "case {case}");
+            found += every.len();
+            let facets = Facets::new(&pts, tol);
+            inside_boxes += occ
+                .bvh
+                .nodes
+                .iter()
+                .filter(|n| {
+                    let (lo, hi) = (to_f64(n.aabb().min), to_f64(n.aabb().max));
+                    matches!(facets.classify(lo, hi), Place::Inside)
+                })
+                .count();
+        }
+        assert!(
+            found > 1000 && inside_boxes > 10,
+            "{found} candidates, {inside_boxes} inside boxes"
+        );
     }
 
     /// The witness segments only short-cut the separating-axis test: on

@@ -1,0 +1,78 @@
+//! What exact visibility costs against the number of occluding triangles:
+//! the bunny rooms (`benches/data/bunny_room_*.obj`, `scenes/bunny_room.obj`:
+//! a 550 mm room with the Stanford bunny decimated to 100 … 3 674 triangles)
+//! assembled at r = 1 on the scene's own triangles (level 0). For each: the
+//! elements, the partly visible (clipped) pairs, the plan's and the fill's
+//! seconds, and the fill's microseconds per partly visible pair; then the
+//! exponents of those against the bunny's triangle count, fitted over the
+//! run. Wall-clock figures of one run: compare them as ratios within it.
+//!
+//!     cargo run --release -p radcol-benches --example visibility [-- MAX_TRIANGLES]
+//!
+//! MAX_TRIANGLES (default 1000) leaves out the larger bunnies: the whole
+//! bunny (3 674) takes about a minute and a half on 2 cores.
+
+use radcol_core::assembly::{AssemblyBackend, AssemblyPlan, CpuBackend, QuadratureOptions};
+use radcol_core::discretization::Discretization;
+use radcol_core::mesh::Mesh;
+use radcol_core::nodes::NodeSet;
+use radcol_core::scene::load_obj;
+use radcol_core::visibility::analyze;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+fn fit(points: &[(f64, f64)]) -> f64 {
+    let n = points.len() as f64;
+    let (mx, my) = points.iter().fold((0.0, 0.0), |(a, b), &(x, y)| {
+        (a + x.ln() / n, b + y.ln() / n)
+    });
+    let (sxy, sxx) = points.iter().fold((0.0, 0.0), |(a, b), &(x, y)| {
+        (a + (x.ln() - mx) * (y.ln() - my), b + (x.ln() - mx).powi(2))
+    });
+    sxy / sxx
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let max: usize = std::env::args()
+        .nth(1)
+        .map(|a| a.parse())
+        .transpose()?
+        .unwrap_or(1000);
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let mut files: Vec<(usize, PathBuf)> = [100, 200, 400, 600, 1000, 2000]
+        .iter()
+        .map(|&n| (n, root.join(format!("data/bunny_room_{n}.obj"))))
+        .collect();
+    files.push((3674, root.join("../scenes/bunny_room.obj")));
+    println!("bunny triangles, elements, partly visible pairs, plan s, fill s, fill µs per partly visible pair");
+    let (mut per_pair, mut fill_s) = (Vec::new(), Vec::new());
+    for (n, path) in files.into_iter().filter(|(n, _)| *n <= max) {
+        let scene = load_obj(&path)?;
+        let mesh = Arc::new(Mesh::new(scene.surface.clone(), 0));
+        let disc = Arc::new(Discretization::new(mesh, NodeSet::new(1, 1.0 / 6.0)?));
+        let visibility = analyze(disc.mesh().surface());
+        let t = Instant::now();
+        let plan = AssemblyPlan::new(disc.clone(), QuadratureOptions::default(), &visibility);
+        let plan_s = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        CpuBackend.assemble(&plan)?;
+        let fill = t.elapsed().as_secs_f64();
+        let partial = plan.stats().pairs_partial;
+        let us = 1e6 * fill / partial as f64;
+        println!(
+            "{n:>6} {:>6} {partial:>9} {plan_s:>8.2} {fill:>8.2} {us:>8.1}",
+            disc.mesh().len()
+        );
+        per_pair.push((n as f64, us));
+        fill_s.push((n as f64, fill));
+    }
+    if per_pair.len() > 1 {
+        println!(
+            "exponents against the bunny's triangles: fill {:.2}, per partly visible pair {:.2}",
+            fit(&fill_s),
+            fit(&per_pair)
+        );
+    }
+    Ok(())
+}
