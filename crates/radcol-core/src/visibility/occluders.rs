@@ -58,6 +58,10 @@ impl std::fmt::Debug for Occluders {
 /// Relative tolerance of the geometric tests (touching, coplanarity).
 const REL_TOL: f64 = 1e-9;
 
+/// Scenes with more triangles than this walk their BVH against the hull's
+/// facets ([`Facets`]); smaller ones against its bounding box only.
+const HULL_WALK_ABOVE: usize = 256;
+
 impl Occluders {
     /// The occluders of `tris` (degenerate triangles are left out: they hide nothing).
     pub fn new(tris: &[[DVec3; 3]]) -> Self {
@@ -198,45 +202,61 @@ impl Occluders {
             return;
         }
         let tol = REL_TOL * self.scale;
-        let facets = Facets::new(pts, tol);
-        let mut hull: Option<HullAxes> = None;
         // The BVH walked against the hull itself, not only its bounding
         // box: the hull of two elements far apart is a thin slab across
         // its box, and a mesh inside the box is mostly beside the slab.
-        let mut stack = vec![0u32];
-        while let Some(id) = stack.pop() {
-            let node = &self.bvh.nodes[id as usize];
-            let (lo, hi) = (node.aabb().min, node.aabb().max);
-            let (lo, hi) = (to_f64(lo), to_f64(hi));
-            match facets.classify(lo, hi) {
-                Place::Outside => continue,
-                Place::Inside => self.push_subtree(id, out),
-                Place::Across if node.is_leaf() => {
-                    for slot in node.first_index..node.first_index + node.prim_count {
-                        let i = self.bvh.primitive_indices[slot as usize];
-                        if self.meets_hull(i, pts, own_planes, witnesses, &mut hull, tol) {
-                            out.push(i);
-                        }
-                    }
-                }
-                Place::Across => stack.extend([node.first_index, node.first_index + 1]),
-            }
-        }
+        // Below HULL_WALK_ABOVE triangles the box alone is cheaper (finding
+        // the facets costs about as much as a few exact tests).
+        let facets = if self.tris.len() > HULL_WALK_ABOVE {
+            Facets::new(pts, tol)
+        } else {
+            Facets::box_only(pts, tol)
+        };
+        let mut hull: Option<HullAxes> = None;
+        let test = |i: u32, hull: &mut Option<HullAxes>| {
+            self.meets_hull(i, pts, own_planes, witnesses, hull, tol)
+        };
+        self.walk(0, &facets, &mut |i| test(i, &mut hull), out);
         out.sort_unstable();
         out.dedup();
     }
 
-    /// Every primitive below BVH node `id` (a node strictly inside the
-    /// hull: each of its triangles meets the hull's interior).
-    fn push_subtree(&self, id: u32, out: &mut Vec<u32>) {
-        let mut stack = vec![id];
-        while let Some(id) = stack.pop() {
-            let node = &self.bvh.nodes[id as usize];
-            if node.is_leaf() {
-                let slots = node.first_index..node.first_index + node.prim_count;
+    /// The occluders below BVH node `id` that `test` accepts, appended to
+    /// `out`: boxes beyond one of the hull's facets skipped, boxes strictly
+    /// inside every facet taken whole (each of their triangles meets the
+    /// hull's interior). Recursive: the depth is the BVH's.
+    fn walk(
+        &self,
+        id: u32,
+        facets: &Facets,
+        test: &mut impl FnMut(u32) -> bool,
+        out: &mut Vec<u32>,
+    ) {
+        let node = &self.bvh.nodes[id as usize];
+        let (lo, hi) = (to_f64(node.aabb().min), to_f64(node.aabb().max));
+        let place = facets.classify(lo, hi);
+        let slots = node.first_index..node.first_index + node.prim_count;
+        match place {
+            Place::Outside => {}
+            Place::Inside if node.is_leaf() => {
                 out.extend(slots.map(|slot| self.bvh.primitive_indices[slot as usize]));
-            } else {
-                stack.extend([node.first_index, node.first_index + 1]);
+            }
+            Place::Across if node.is_leaf() => {
+                for slot in slots {
+                    let i = self.bvh.primitive_indices[slot as usize];
+                    if test(i) {
+                        out.push(i);
+                    }
+                }
+            }
+            Place::Inside => {
+                let all = Facets::everything();
+                self.walk(node.first_index, &all, test, out);
+                self.walk(node.first_index + 1, &all, test, out);
+            }
+            Place::Across => {
+                self.walk(node.first_index, facets, test, out);
+                self.walk(node.first_index + 1, facets, test, out);
             }
         }
     }
@@ -344,9 +364,27 @@ impl Facets {
                 }
             }
         }
-        let (lo, hi) = bounds(pts.iter().copied());
         Self {
             planes,
+            ..Self::box_only(pts, tol)
+        }
+    }
+
+    /// Every box inside: below a node strictly inside the hull.
+    fn everything() -> Self {
+        Self {
+            planes: Vec::new(),
+            lo: DVec3::NEG_INFINITY,
+            hi: DVec3::INFINITY,
+            tol: 0.0,
+        }
+    }
+
+    /// The hull's bounding box alone (no facet: nothing is inside).
+    fn box_only(pts: &[DVec3], tol: f64) -> Self {
+        let (lo, hi) = bounds(pts.iter().copied());
+        Self {
+            planes: Vec::new(),
             lo,
             hi,
             tol,
@@ -357,6 +395,9 @@ impl Facets {
         let t = self.tol;
         if lo.cmpgt(self.hi + t).any() || hi.cmplt(self.lo - t).any() {
             return Place::Outside;
+        }
+        if self.lo == DVec3::NEG_INFINITY {
+            return Place::Inside;
         }
         let (c, e) = ((lo + hi) / 2.0, (hi - lo) / 2.0);
         let mut inside = self.planes.len() >= 4;
