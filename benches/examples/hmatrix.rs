@@ -14,6 +14,7 @@
 //! The entries come from the assembly plan, which classifies all n² element
 //! pairs (its table keeps them as runs of equal classes).
 
+use radcol_benches::fit_exponent as fit;
 use radcol_core::assembly::{AssemblyBackend, AssemblyPlan, CpuBackend, QuadratureOptions};
 use radcol_core::discretization::Discretization;
 use radcol_core::hmatrix::radiosity::PlanEntries;
@@ -26,17 +27,6 @@ use std::sync::Arc;
 use std::time::Instant;
 
 const DENSE_CAP: usize = 16_000;
-
-fn fit(points: &[(f64, f64)]) -> f64 {
-    let n = points.len() as f64;
-    let (mx, my) = points.iter().fold((0.0, 0.0), |(a, b), &(x, y)| {
-        (a + x.ln() / n, b + y.ln() / n)
-    });
-    let (sxy, sxx) = points.iter().fold((0.0, 0.0), |(a, b), &(x, y)| {
-        (a + (x.ln() - mx) * (y.ln() - my), b + (x.ln() - mx).powi(2))
-    });
-    sxy / sxx
-}
 
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();

@@ -12,6 +12,7 @@
 //! MAX_TRIANGLES (default 1000) leaves out the larger bunnies: the whole
 //! bunny (3 674) takes about a minute and a half on 2 cores.
 
+use radcol_benches::fit_exponent as fit;
 use radcol_core::assembly::{AssemblyBackend, AssemblyPlan, CpuBackend, QuadratureOptions};
 use radcol_core::discretization::Discretization;
 use radcol_core::mesh::Mesh;
@@ -21,17 +22,6 @@ use radcol_core::visibility::analyze;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
-
-fn fit(points: &[(f64, f64)]) -> f64 {
-    let n = points.len() as f64;
-    let (mx, my) = points.iter().fold((0.0, 0.0), |(a, b), &(x, y)| {
-        (a + x.ln() / n, b + y.ln() / n)
-    });
-    let (sxy, sxx) = points.iter().fold((0.0, 0.0), |(a, b), &(x, y)| {
-        (a + (x.ln() - mx) * (y.ln() - my), b + (x.ln() - mx).powi(2))
-    });
-    sxy / sxx
-}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let max: usize = std::env::args()

@@ -68,6 +68,18 @@ macro_rules! assert_close {
     };
 }
 
+/// A reproducible stream of numbers in [0, 1) (xorshift64, 53 bits) for
+/// random test configurations: the same `seed` gives the same stream.
+pub fn uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

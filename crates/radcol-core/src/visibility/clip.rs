@@ -520,13 +520,7 @@ mod tests {
     /// first and second moments agree to rounding.
     #[test]
     fn merged_and_subtracted_regions_agree() {
-        let mut state = 0x9e3779b97f4a7c15u64;
-        let mut rnd = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = crate::testing::uniform(0x9e3779b97f4a7c15u64);
         let v = [
             DVec3::new(-1., -1., 0.),
             DVec3::new(2., -1., 0.2),

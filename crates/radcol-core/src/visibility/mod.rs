@@ -6,6 +6,7 @@
 //! built-in analytic surfaces, a box room, two facing plates) never pay for it.
 
 pub mod clip;
+mod hull;
 pub mod occluders;
 pub(crate) mod walk;
 

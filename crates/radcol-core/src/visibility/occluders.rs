@@ -11,6 +11,7 @@
 //! pair is integrated with the visible part clipped exactly
 //! ([`super::clip`]).
 
+use super::hull::{Facets, HullAxes, Place};
 use crate::geometry::bounds;
 use glam::{DVec3, Vec3A};
 use obvhs::aabb::Aabb;
@@ -317,192 +318,9 @@ fn to_f64(v: Vec3A) -> DVec3 {
     DVec3::new(v.x as f64, v.y as f64, v.z as f64)
 }
 
-/// Where a box lies against a convex hull.
-enum Place {
-    /// Beyond one of its planes by more than the tolerance: no point of
-    /// the box meets the hull's interior.
-    Outside,
-    /// Strictly inside every facet by more than the tolerance.
-    Inside,
-    /// Neither decided.
-    Across,
-}
-
-/// The facet planes of the convex hull of a few points (n·x ≤ d inside,
-/// n unit), found among the planes through every triple of them; with
-/// fewer than four the hull is flat, and no box is said to be inside it.
-struct Facets {
-    planes: Vec<(DVec3, f64)>,
-    lo: DVec3,
-    hi: DVec3,
-    tol: f64,
-}
-
-impl Facets {
-    fn new(pts: &[DVec3], tol: f64) -> Self {
-        let m = pts.len();
-        let mut planes = Vec::new();
-        for i in 0..m {
-            for j in i + 1..m {
-                for k in j + 1..m {
-                    let n = (pts[j] - pts[i]).cross(pts[k] - pts[i]);
-                    let len = n.length();
-                    if len.is_nan() || len <= 0.0 {
-                        continue;
-                    }
-                    let n = n / len;
-                    let d = pts[i].dot(n);
-                    let side = |q: &DVec3| q.dot(n) - d;
-                    let (below, above) = pts.iter().fold((false, false), |(b, a), q| {
-                        (b || side(q) < -tol, a || side(q) > tol)
-                    });
-                    match (below, above) {
-                        (true, false) => planes.push((n, d)),
-                        (false, true) => planes.push((-n, -d)),
-                        _ => {}
-                    }
-                }
-            }
-        }
-        Self {
-            planes,
-            ..Self::box_only(pts, tol)
-        }
-    }
-
-    /// Every box inside: below a node strictly inside the hull.
-    fn everything() -> Self {
-        Self {
-            planes: Vec::new(),
-            lo: DVec3::NEG_INFINITY,
-            hi: DVec3::INFINITY,
-            tol: 0.0,
-        }
-    }
-
-    /// The hull's bounding box alone (no facet: nothing is inside).
-    fn box_only(pts: &[DVec3], tol: f64) -> Self {
-        let (lo, hi) = bounds(pts.iter().copied());
-        Self {
-            planes: Vec::new(),
-            lo,
-            hi,
-            tol,
-        }
-    }
-
-    fn classify(&self, lo: DVec3, hi: DVec3) -> Place {
-        let t = self.tol;
-        if lo.cmpgt(self.hi + t).any() || hi.cmplt(self.lo - t).any() {
-            return Place::Outside;
-        }
-        if self.lo == DVec3::NEG_INFINITY {
-            return Place::Inside;
-        }
-        let (c, e) = ((lo + hi) / 2.0, (hi - lo) / 2.0);
-        let mut inside = self.planes.len() >= 4;
-        for &(n, d) in &self.planes {
-            let (mid, half) = (c.dot(n) - d, e.dot(n.abs()));
-            if mid - half > t {
-                return Place::Outside;
-            }
-            inside &= mid + half < -t;
-        }
-        if inside {
-            Place::Inside
-        } else {
-            Place::Across
-        }
-    }
-}
-
 fn to_f32(v: DVec3) -> Vec3A {
     // Rounding outward is not needed: the padding is 100× f32's relative step.
     Vec3A::new(v.x as f32, v.y as f32, v.z as f32)
-}
-
-/// Candidate separating directions of a small point set's hull: the normals
-/// of all its point triples and its point-to-point edges (a superset of the
-/// hull's face normals and edges, so the separating-axis theorem stays exact).
-struct HullAxes {
-    normals: Vec<DVec3>,
-    edges: Vec<DVec3>,
-}
-
-impl HullAxes {
-    fn new(pts: &[DVec3]) -> Self {
-        let m = pts.len();
-        let mut normals = Vec::with_capacity(m * m * m / 6);
-        let mut edges = Vec::with_capacity(m * m / 2);
-        for i in 0..m {
-            for j in i + 1..m {
-                let e = pts[j] - pts[i];
-                if e.length_squared() > 0.0 {
-                    edges.push(e);
-                }
-                for k in j + 1..m {
-                    let n = e.cross(pts[k] - pts[i]);
-                    if n.length_squared() > 0.0 {
-                        normals.push(n);
-                    }
-                }
-            }
-        }
-        Self { normals, edges }
-    }
-
-    /// True when triangle `t` and conv(`pts`) overlap by more than `tol`
-    /// along every candidate axis (the separating-axis theorem for convex
-    /// polytopes, with touching counted as separated).
-    fn meets(&self, pts: &[DVec3], t: &Occluder, tol: f64) -> bool {
-        let separated = |axis: DVec3| -> bool {
-            let len2 = axis.length_squared();
-            if len2.is_nan() || len2 <= 0.0 {
-                return false;
-            }
-            let (mut h0, mut h1) = (f64::INFINITY, f64::NEG_INFINITY);
-            for p in pts {
-                let d = p.dot(axis);
-                h0 = h0.min(d);
-                h1 = h1.max(d);
-            }
-            let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
-            for v in &t.v {
-                let d = v.dot(axis);
-                t0 = t0.min(d);
-                t1 = t1.max(d);
-            }
-            // Overlap (h1 - t0 or t1 - h0, whichever is smaller) of at most
-            // tol · |axis|, decided without a square root when it is clear.
-            let overlap = (h1 - t0).min(t1 - h0);
-            overlap <= 0.0 || overlap * overlap <= tol * tol * len2
-        };
-        if separated(t.normal) {
-            return false;
-        }
-        if self.normals.iter().any(|&n| separated(n)) {
-            return false;
-        }
-        let te = [t.v[1] - t.v[0], t.v[2] - t.v[1], t.v[0] - t.v[2]];
-        for &e in &self.edges {
-            if separated(e.cross(t.normal)) {
-                return false;
-            }
-            for &f in &te {
-                if separated(e.cross(f)) {
-                    return false;
-                }
-            }
-        }
-        // Axes in the triangle's plane across its own edges (needed when the
-        // hull is flat in a plane near the triangle's).
-        for &f in &te {
-            if separated(f.cross(t.normal)) {
-                return false;
-            }
-        }
-        true
-    }
 }
 
 #[cfg(test)]
@@ -571,13 +389,7 @@ mod tests {
     /// triangles where both kinds of box occur.
     #[test]
     fn the_hull_walk_finds_what_testing_every_triangle_finds() {
-        let mut state = 0x853c49e6748fea9bu64;
-        let mut rnd = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = crate::testing::uniform(0x853c49e6748fea9bu64);
         let mut p = || DVec3::new(rnd(), rnd(), rnd());
         let tris: Vec<[DVec3; 3]> = (0..2000)
             .map(|_| {
@@ -627,13 +439,7 @@ mod tests {
     /// the plain test's.
     #[test]
     fn witnesses_do_not_change_the_candidates() {
-        let mut state = 0x2545f4914f6cdd1du64;
-        let mut rnd = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = crate::testing::uniform(0x2545f4914f6cdd1du64);
         let mut p = || DVec3::new(rnd(), rnd(), rnd());
         let tris: Vec<[DVec3; 3]> = (0..60)
             .map(|_| {
