@@ -9,6 +9,7 @@
 
 mod box_constant;
 mod contact;
+mod cost;
 mod discontinuity;
 mod edges;
 mod ellipsoid_orders;

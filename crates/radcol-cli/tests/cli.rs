@@ -943,7 +943,10 @@ fn info_describes_a_scene() {
         "{v}"
     );
     let text = String::from_utf8_lossy(&radcol_ok(&["info", "cornell"]).stdout).to_string();
-    assert!(text.contains("time estimate   - (--plan builds"), "{text}");
+    assert!(
+        text.contains("time estimate   - (--plan measures"),
+        "{text}"
+    );
     let v = stdout_json(&radcol(&[
         "info", "cornell", "--level", "0", "--plan", "--json",
     ]));
@@ -957,9 +960,13 @@ fn info_describes_a_scene() {
         .unwrap()
         .contains("behind"));
     assert_eq!(v["bounding_box"]["max"][0], 556.0);
+    // 50 row blocks, all measured: exact counts, no sampling error.
     let e = &v["estimate"];
-    assert!(e["pairs_partial"].as_u64().unwrap() > 0);
-    assert!(e["assembly_s"].as_f64().unwrap() > 0.0);
+    assert_eq!(e["sampled"], 50);
+    let partial = &e["assembly"]["pairs_partial"];
+    assert!(partial["value"].as_f64().unwrap() > 0.0 && partial["std_error"] == 0.0);
+    assert!(e["assembly"]["fill_seconds"]["value"].as_f64().unwrap() > 0.0);
+    assert!(e["estimate"]["plan_seconds"]["value"].as_f64().unwrap() > 0.0);
     // --max-edge refines: no element edge longer than H afterwards.
     let v = stdout_json(&radcol(&[
         "info",

@@ -327,12 +327,16 @@ pub struct InfoArgs {
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub max_edge: Option<f64>,
 
-    /// Also build the assembly plan (every element pair classified, as a
-    /// solve does: seconds to minutes), to count the pairs and time sample
-    /// row blocks for an assembly estimate [default: sizes from the
-    /// geometry only]
-    #[arg(long)]
-    pub plan: bool,
+    /// Also predict what the assembly and the error estimate will cost:
+    /// plan and fill a sample of row blocks (a few seconds), and extrapolate
+    /// the pair counts, the occlusion work (candidate occluders and the
+    /// memory they hold) and the seconds on this machine's threads, each
+    /// with its standard error. ROWS: how many row blocks to measure
+    /// [default: sizes from the geometry only; ROWS: radcol_core's
+    /// COST_SAMPLE_ROWS, 64]
+    #[arg(long, value_name = "ROWS", num_args = 0..=1,
+          value_parser = clap::value_parser!(u32).range(1..))]
+    pub plan: Option<Option<u32>>,
 
     /// Print one JSON object instead of the text report.
     #[arg(long)]

@@ -2,7 +2,7 @@
 //! and an assembly time estimate.
 
 use super::{precise, secs};
-use radcol_core::run::MemoryEstimate;
+use radcol_core::run::{AssemblyCost, Extrapolated, MemoryEstimate};
 use serde::Serialize;
 use std::fmt;
 
@@ -111,25 +111,13 @@ pub struct MaterialInfo {
     pub area: f64,
 }
 
-/// Assembly estimate from timed row blocks.
+/// The assembly's and the error estimate's cost, predicted from sampled
+/// row blocks ([`AssemblyCost`]), and the solve's arithmetic.
 #[derive(Debug, Serialize)]
 pub struct Estimate {
-    /// Seconds to plan (classify pairs, clip tests).
-    pub plan_s: f64,
-    /// Estimated assembly seconds on the CPU backend (plan included).
-    pub assembly_s: f64,
-    /// Row blocks timed.
-    pub sampled_blocks: usize,
-    /// Threads assumed.
-    pub threads: usize,
-    /// Far pairs.
-    pub pairs_far: u64,
-    /// Near pairs.
-    pub pairs_near: u64,
-    /// Partly visible pairs.
-    pub pairs_partial: u64,
-    /// Culled pairs.
-    pub pairs_culled: u64,
+    /// Pairs, candidate occluders, plan memory and seconds, extrapolated.
+    #[serde(flatten)]
+    pub cost: AssemblyCost,
     /// 2 N² per GMRES iteration and channel.
     pub gmres_flops_per_iteration: f64,
     /// 2 N³ / 3 for one LU factorisation.
@@ -277,11 +265,11 @@ impl fmt::Display for InfoReport {
             Some(e) => write!(w, "{e}"),
             None if !i.planned => writeln!(
                 w,
-                "  time estimate   - (--plan builds the assembly plan: pair counts and timed row blocks)"
+                "  time estimate   - (--plan measures sampled row blocks: pairs, visibility cost, seconds)"
             ),
             None => writeln!(
                 w,
-                "  time estimate   - (more elements than radcol info plans; try a lower --level)"
+                "  time estimate   - (more elements than radcol info builds; try a lower --level)"
             ),
         }
     }
@@ -331,25 +319,83 @@ impl SceneInfo {
 }
 
 impl fmt::Display for Estimate {
-    /// The pairs and time-estimate lines of the text report.
+    /// The pairs, visibility and time-estimate lines of the text report.
     fn fmt(&self, w: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let e = self;
+        let (c, a) = (&self.cost, &self.cost.assembly);
+        let measured = if c.sampled == c.rows {
+            format!("all {} row blocks measured", c.rows)
+        } else {
+            format!("{} of {} row blocks measured", c.sampled, c.rows)
+        };
         writeln!(
             w,
-            "  pairs           {} far, {} near, {} partly visible, {} culled",
-            e.pairs_far, e.pairs_near, e.pairs_partial, e.pairs_culled
+            "  pairs           {} far, {} near, {} partly visible, {} culled ({measured})",
+            count(a.pairs_far),
+            count(a.pairs_near),
+            count(a.pairs_partial),
+            count(a.pairs_culled),
         )?;
+        if a.pairs_partial.value > 0.0 {
+            writeln!(
+                w,
+                "  visibility cost {} candidate occluders over the partly visible pairs, {} held while planning, \
+                 {} with the estimate's",
+                count(a.candidates),
+                bytes(a.partial_bytes),
+                bytes(Extrapolated {
+                    value: a.partial_bytes.value + c.estimate.partial_bytes.value,
+                    std_error: a.partial_bytes.std_error + c.estimate.partial_bytes.std_error,
+                }),
+            )?;
+        }
         writeln!(
             w,
-            "  time estimate   assembly ≈ {} on {} CPU threads (plan {}, {} row blocks timed); \
-             solve: {:.3e} flops per GMRES iteration and channel, {:.3e} for an LU factorisation",
-            secs(e.assembly_s),
-            e.threads,
-            secs(e.plan_s),
-            e.sampled_blocks,
-            e.gmres_flops_per_iteration,
-            e.lu_flops
+            "  time estimate   assembly ≈ {} (plan {}, fill {}), error estimate ≈ {} (plan {}, fill {}), \
+             on {} CPU threads; solve: {:.3e} flops per GMRES iteration and channel, {:.3e} for an LU factorisation",
+            secs(a.seconds()),
+            spread(a.plan_seconds),
+            spread(a.fill_seconds),
+            secs(c.estimate.seconds()),
+            spread(c.estimate.plan_seconds),
+            spread(c.estimate.fill_seconds),
+            c.threads,
+            self.gmres_flops_per_iteration,
+            self.lu_flops
         )
+    }
+}
+
+/// "1.234e5 ± 3 %", or the exact count when nothing was extrapolated.
+fn count(e: Extrapolated) -> String {
+    if e.std_error == 0.0 {
+        format!("{:.0}", e.value)
+    } else {
+        format!("≈{:.3e}{}", e.value, relative(e))
+    }
+}
+
+/// Seconds with their relative standard error.
+fn spread(e: Extrapolated) -> String {
+    format!("{}{}", secs(e.value), relative(e))
+}
+
+/// Bytes with their relative standard error.
+fn bytes(e: Extrapolated) -> String {
+    let v = e.value;
+    let text = if v >= 1e9 {
+        format!("{:.2} GB", v / 1e9)
+    } else {
+        format!("{:.1} MB", v / 1e6)
+    };
+    format!("{text}{}", relative(e))
+}
+
+/// " ± 3 %" of an extrapolated amount (nothing when exact or zero).
+fn relative(e: Extrapolated) -> String {
+    if e.std_error > 0.0 && e.value > 0.0 {
+        format!(" ± {:.0} %", (100.0 * e.std_error / e.value).max(1.0))
+    } else {
+        String::new()
     }
 }
 

@@ -11,17 +11,16 @@ use crate::setup::{default_refinement, load};
 use crate::validate::InfoJob;
 use anyhow::Result;
 use radcol_core::alpha0::auto_alpha;
-use radcol_core::assembly::{AssemblyPlan, FillMode, QuadratureOptions};
+use radcol_core::assembly::QuadratureOptions;
 use radcol_core::discretization::Discretization;
 use radcol_core::geometry::Surface;
 use radcol_core::hmatrix::HOptions;
 use radcol_core::mesh::Mesh;
 use radcol_core::nodes::NodeSet;
-use radcol_core::run::MemoryEstimate;
+use radcol_core::run::{AssemblyCost, MemoryEstimate};
 use radcol_core::visibility::{self, VisibilityAnalysis};
 use std::io::Write;
 use std::sync::Arc;
-use std::time::Instant;
 
 /// Largest mesh `radcol info` builds to measure shape ratios and area.
 const INFO_MAX_BUILT_ELEMENTS: u64 = 1 << 17;
@@ -54,8 +53,8 @@ struct Refinement {
     level: u32,
     max_edge: Option<f64>,
     degree: usize,
-    /// Whether to build the assembly plan (`--plan`).
-    plan: bool,
+    /// Row blocks to measure for a cost prediction (`--plan`).
+    plan: Option<usize>,
 }
 
 /// The mesh of `job`, or when it is too big to build, the finest uniform
@@ -92,10 +91,10 @@ fn info_report(job: &Refinement, loaded: &Loaded) -> InfoReport {
     let vis = visibility::analyze(&job.surface);
     let bbox = job.surface.bounding_box();
     // Planned on the mesh just built, which is the job's when it is small enough.
-    let estimate =
-        (job.plan && elements <= INFO_MAX_PLANNED_ELEMENTS && measured_level == job.level)
-            .then(|| estimate_assembly(job.degree, &mesh, &vis))
-            .flatten();
+    let estimate = job
+        .plan
+        .filter(|_| measured_level == job.level)
+        .and_then(|rows| estimate_assembly(job.degree, &mesh, &vis, rows));
     InfoReport {
         scene: job.surface.name.clone(),
         level: job.level,
@@ -126,7 +125,7 @@ fn info_report(job: &Refinement, loaded: &Loaded) -> InfoReport {
             .flatten(),
         visibility: vis,
         contents: loaded.scene().map(|sc| scene_info(sc)),
-        planned: job.plan,
+        planned: job.plan.is_some(),
         estimate,
     }
 }
@@ -180,44 +179,21 @@ fn predict_compressed(degree: usize, mesh: &Arc<Mesh>) -> Option<CompressedInfo>
     })
 }
 
-/// Row blocks timed by `radcol info` to estimate the assembly time.
-const INFO_SAMPLE_BLOCKS: usize = 24;
-/// Largest mesh whose assembly `radcol info` plans (classifying n² pairs).
-const INFO_MAX_PLANNED_ELEMENTS: u64 = 6000;
-
-/// Plans the assembly on `mesh` (the job's) and times a few row blocks spread
-/// over it on this machine's CPU, extrapolating to all blocks on all threads.
+/// Predicts the assembly's and the error estimate's cost on `mesh` (the
+/// job's) from `rows` row blocks, with the solve's default quadrature, on
+/// this machine's CPU threads.
 fn estimate_assembly(
     degree: usize,
     mesh: &Arc<Mesh>,
     visibility: &VisibilityAnalysis,
+    rows: usize,
 ) -> Option<Estimate> {
     let nodes = NodeSet::new(degree, auto_alpha(degree)).ok()?;
     let disc = Arc::new(Discretization::new(Arc::clone(mesh), nodes));
-    let t = Instant::now();
-    let plan = AssemblyPlan::new(disc.clone(), QuadratureOptions::default(), visibility);
-    let plan_s = t.elapsed().as_secs_f64();
-    let n = disc.mesh().len();
-    let f = disc.max_nodes_per_element();
-    let samples = n.min(INFO_SAMPLE_BLOCKS);
-    let mut block = vec![0.0; f * disc.len()];
-    let t = Instant::now();
-    for i in 0..samples {
-        plan.fill_block(i * n / samples, &mut block, FillMode::All);
-    }
-    let per_block = t.elapsed().as_secs_f64() / samples.max(1) as f64;
-    let threads = rayon::current_num_threads();
-    let stats = plan.stats();
+    let cost = AssemblyCost::predict(&disc, &QuadratureOptions::default(), visibility, rows);
     let nn = disc.len() as f64;
     Some(Estimate {
-        plan_s,
-        assembly_s: plan_s + per_block * n as f64 / threads as f64,
-        sampled_blocks: samples,
-        threads,
-        pairs_far: stats.pairs_far,
-        pairs_near: stats.pairs_near,
-        pairs_partial: stats.pairs_partial,
-        pairs_culled: stats.pairs_culled,
+        cost,
         gmres_flops_per_iteration: 2.0 * nn * nn,
         lu_flops: 2.0 / 3.0 * nn * nn * nn,
     })

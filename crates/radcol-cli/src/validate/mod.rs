@@ -157,8 +157,9 @@ pub struct InfoJob {
     pub degree: usize,
     /// Refinement level; None: the default refinement.
     pub level: Option<u32>,
-    /// Build the assembly plan for pair counts and a time estimate.
-    pub plan: bool,
+    /// Predict the assembly's and the estimate's cost from this many
+    /// sampled row blocks.
+    pub plan: Option<usize>,
     /// JSON instead of text.
     pub json: bool,
 }
@@ -362,7 +363,9 @@ fn info_job(a: InfoArgs) -> Result<InfoJob> {
         max_edge,
         degree,
         level: a.level,
-        plan: a.plan,
+        plan: a
+            .plan
+            .map(|r| r.map_or(radcol_core::run::COST_SAMPLE_ROWS, |r| r as usize)),
         json: a.json,
     })
 }

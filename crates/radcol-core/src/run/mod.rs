@@ -14,6 +14,7 @@
 
 pub mod adapt;
 mod config;
+mod cost;
 mod inputs;
 pub mod operator;
 mod outcome;
@@ -22,6 +23,7 @@ mod relight;
 mod size;
 
 pub use config::{SolveConfig, SolverKind, DEFAULT_COMPRESSION_TOL};
+pub use cost::{AssemblyCost, Extrapolated, MatrixCost, COST_SAMPLE_ROWS};
 pub use inputs::{check_size, discretize, MAX_EXTENT, MIN_EXTENT};
 pub use operator::{GeometricOperator, OperatorChoice, OperatorDecision, OperatorKind};
 pub use outcome::{ChannelResult, SolveOutcome, SolverReport, Timings};

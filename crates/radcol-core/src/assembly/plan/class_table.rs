@@ -84,6 +84,14 @@ impl ClassTable {
         Row::Runs(starts.into(), codes.into())
     }
 
+    /// A row of `n` culled pairs (one run), without writing `n` codes.
+    pub(super) fn culled(n: usize) -> Row {
+        if n == 0 || n > u32::MAX as usize {
+            return Row::Bytes(vec![0u8; n].into());
+        }
+        Row::Runs(vec![0u32].into(), vec![0u8].into())
+    }
+
     /// Elements per row.
     pub fn width(&self) -> usize {
         self.n

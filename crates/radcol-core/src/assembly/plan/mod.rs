@@ -17,6 +17,7 @@ mod classify;
 mod execute;
 mod kernels;
 mod reuse;
+mod sample;
 mod tables;
 
 pub use class_table::{
@@ -26,6 +27,7 @@ pub use class_table::{ClassTable, Runs};
 pub use classify::PairClass;
 pub use kernels::far_kernel_row;
 pub use reuse::Unchanged;
+pub use sample::RowCost;
 pub use tables::{FarSpan, FarTable};
 
 use super::integrate::{ElementIntegrator, QuadratureOptions, SelfRules, Shortfall, ShortfallLog};
@@ -96,6 +98,9 @@ pub struct AssemblyPlan {
     /// With `unchanged`: the previous plan's columns' and rows'
     /// discretizations.
     unchanged: Option<(Arc<Unchanged>, Arc<Discretization>, Arc<Discretization>)>,
+    /// Of a sampled plan ([`AssemblyCost`]): the seconds each row block took
+    /// to classify (zero for the rows left out); empty otherwise.
+    row_seconds: Vec<f32>,
 }
 
 impl AssemblyPlan {
@@ -120,7 +125,7 @@ impl AssemblyPlan {
         visibility: &VisibilityAnalysis,
         progress: Option<ProgressHandle>,
     ) -> Self {
-        Self::build(disc, None, opts, visibility, progress, None)
+        Self::build(disc, None, opts, visibility, progress, None, None)
     }
 
     /// The plan of the rectangular matrix whose rows are the points of
@@ -149,7 +154,7 @@ impl AssemblyPlan {
                 .is_some_and(|r| same_nodes_where_unchanged(r, &rows, u))
                 && p.reusable_by(&disc, &opts, visibility, u)
         });
-        Self::build(disc, Some(rows), opts, visibility, None, prev)
+        Self::build(disc, Some(rows), opts, visibility, None, prev, None)
     }
 
     /// Whether a plan for `disc` may take this plan's pairs of `unchanged` elements.
@@ -183,7 +188,7 @@ impl AssemblyPlan {
         let same =
             previous.rows.is_none() && previous.reusable_by(&disc, &opts, visibility, &unchanged);
         let prev = same.then_some((previous, unchanged));
-        Self::build(disc, None, opts, visibility, progress, prev)
+        Self::build(disc, None, opts, visibility, progress, prev, None)
     }
 
     fn build(
@@ -193,6 +198,7 @@ impl AssemblyPlan {
         visibility: &VisibilityAnalysis,
         progress: Option<ProgressHandle>,
         prev: Option<(&AssemblyPlan, Arc<Unchanged>)>,
+        only: Option<&[bool]>,
     ) -> Self {
         if let Some(p) = &progress {
             p.start("plan", disc.mesh().len() as u64);
@@ -200,13 +206,14 @@ impl AssemblyPlan {
         let occluders = visibility
             .needed
             .then(|| Occluders::new(&visibility::base_triangles(disc.mesh().surface())));
-        let (classes, partial) = classify_all(
+        let (classes, partial, row_seconds) = classify_all(
             &disc,
             rows.as_deref().unwrap_or(&disc),
             opts.tol,
             occluders.as_ref(),
             &progress,
             prev.as_ref().map(|(p, u)| (*p, &**u)),
+            only,
         );
         let ladder = RuleLadder::new();
         let (stats, used) = count(&classes, rows.as_deref().unwrap_or(&disc), &ladder);
@@ -229,6 +236,7 @@ impl AssemblyPlan {
             partial,
             progress,
             unchanged: prev.map(|(p, u)| (u, p.disc.clone(), p.rows().clone())),
+            row_seconds,
         }
     }
 
@@ -348,7 +356,8 @@ fn classify_all(
     occluders: Option<&Occluders>,
     progress: &Option<ProgressHandle>,
     prev: Option<(&AssemblyPlan, &Unchanged)>,
-) -> (ClassTable, Vec<PartialRow>) {
+    only: Option<&[bool]>,
+) -> (ClassTable, Vec<PartialRow>, Vec<f32>) {
     let mesh = disc.mesh();
     let n = mesh.len();
     let shapes = ElementShapes::new(mesh);
@@ -357,13 +366,15 @@ fn classify_all(
         Some(_) => RefinementTree::new(mesh),
         None => RefinementTree::default(),
     };
-    let rows: Vec<(class_table::Row, PartialRow)> = (0..n)
+    let rows: Vec<(class_table::Row, PartialRow, f32)> = (0..n)
         .into_par_iter()
         .map(|kp| {
+            let started = std::time::Instant::now();
             // A cancelled solve classifies nothing more (all culled): the
             // pipeline returns `Error::Cancelled` once the plan is built.
-            if progress.as_ref().is_some_and(|p| p.cancelled()) {
-                return (ClassTable::encode(n, &vec![0u8; n]), PartialRow::default());
+            // Rows left out of a sampled plan: all culled, likewise.
+            if progress.as_ref().is_some_and(|p| p.cancelled()) || only.is_some_and(|o| !o[kp]) {
+                return (ClassTable::culled(n), PartialRow::default(), 0.0);
             }
             let block = &pts[rows.range(kp)];
             // The previous plan's row of this element, when it is unchanged.
@@ -415,18 +426,23 @@ fn classify_all(
             if let Some(p) = progress {
                 p.advance(1);
             }
-            (ClassTable::encode(n, &row), partial)
+            let row = ClassTable::encode(n, &row);
+            (row, partial, started.elapsed().as_secs_f32())
         })
         .collect();
     let mut classes = Vec::with_capacity(n);
     let mut partial = Vec::with_capacity(if occluders.is_some() { n } else { 0 });
-    for (row, p) in rows {
+    let mut seconds = Vec::with_capacity(if only.is_some() { n } else { 0 });
+    for (row, p, t) in rows {
         classes.push(row);
         if occluders.is_some() {
             partial.push(p);
         }
+        if only.is_some() {
+            seconds.push(t);
+        }
     }
-    (ClassTable::from_encoded(n, classes), partial)
+    (ClassTable::from_encoded(n, classes), partial, seconds)
 }
 
 /// Whether the elements `unchanged` keeps have the same node set (degree
