@@ -202,8 +202,11 @@ fn room(obj: &mut Obj, w: f64, d: f64, cols: usize, rows: usize) {
     }
 }
 
-/// The bunny of the bunny room: its vertices and (0-based) triangles.
-fn read_bunny(path: &Path) -> Result<(Vec<DVec3>, Vec<[usize; 3]>), Box<dyn std::error::Error>> {
+/// Vertices and (0-based) triangles.
+type Mesh = (Vec<DVec3>, Vec<[usize; 3]>);
+
+/// The bunny of the bunny room.
+fn read_bunny(path: &Path) -> Result<Mesh, Box<dyn std::error::Error>> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let (mut vs, mut fs, mut in_bunny) = (Vec::new(), Vec::new(), false);
     for (n, line) in text.lines().enumerate() {
