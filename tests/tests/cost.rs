@@ -5,9 +5,10 @@
 
 use radcol_core::assembly::{AssemblyPlan, PairClass, QuadratureOptions};
 use radcol_core::discretization::Discretization;
+use radcol_core::error::InputError;
 use radcol_core::mesh::Mesh;
 use radcol_core::nodes::NodeSet;
-use radcol_core::run::{AssemblyCost, Extrapolated};
+use radcol_core::run::{check_plan_memory, AssemblyCost, Extrapolated};
 use radcol_core::scene::load_obj;
 use radcol_core::visibility::analyze;
 use std::path::Path;
@@ -97,4 +98,29 @@ fn the_cost_prediction_counts_what_the_plan_holds() {
         a.candidates.value,
         3.0,
     );
+}
+
+/// A solve refuses, before planning, a plan whose candidate lists would not
+/// fit: the prediction against the memory available, in the error.
+#[test]
+fn a_plan_that_cannot_fit_is_refused_before_it_is_built() {
+    let (disc, vis) = bunny_room();
+    let quad = QuadratureOptions::default();
+    let full = AssemblyCost::predict(&disc, &quad, &vis, disc.mesh().len());
+    let bytes = full.assembly.partial_bytes.value;
+    assert!(bytes > 1e5, "{bytes}");
+    // Sampled (64 of 216 row blocks, about ± 20 %): refused with half the
+    // bytes available, passed with twice.
+    let small = Some((bytes / 2.0) as u64);
+    match check_plan_memory(&disc, &quad, &vis, small, 0) {
+        Err(e @ InputError::VisibilityPlanTooLarge { .. }) => {
+            let text = e.to_string();
+            println!("{text}");
+            assert!(text.contains("partly visible pairs") && text.contains("coarser mesh"));
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(check_plan_memory(&disc, &quad, &vis, Some((bytes * 2.0) as u64), 0).is_ok());
+    // Meshes below the threshold are not sampled at all.
+    assert!(check_plan_memory(&disc, &quad, &vis, Some(1), disc.mesh().len() + 1).is_ok());
 }

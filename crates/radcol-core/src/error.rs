@@ -206,6 +206,24 @@ pub enum InputError {
         /// Bytes available.
         available: u64,
     },
+    /// The candidate occluders of the partly visible pairs, which the plan
+    /// holds while the matrix is built, would not fit in memory (predicted
+    /// from sampled row blocks: [`crate::run::AssemblyCost`]).
+    #[error("{} in a scene that occludes have about {:.3e} partly visible pairs (± {:.0} %), whose candidate occluders the assembly plan would hold in about {} (predicted from {sampled} of their row blocks), but only {} of memory is available; use a coarser mesh (a scanned mesh's own triangles are elements already at level 0) or fewer occluding triangles", elements_text(*elements), partial_pairs, 100.0 * relative_error, gib(*bytes), gib(*available as f64))]
+    VisibilityPlanTooLarge {
+        /// Elements n.
+        elements: u64,
+        /// Partly visible (point × element) pairs, predicted.
+        partial_pairs: f64,
+        /// The predictions' relative standard error.
+        relative_error: f64,
+        /// Bytes of their candidate lists, predicted.
+        bytes: f64,
+        /// Row blocks sampled.
+        sampled: usize,
+        /// Bytes available.
+        available: u64,
+    },
     /// A curved surface that may occlude itself: radcol clips flat elements only.
     #[error("surface '{surface}': patch '{patch}' is curved and the surface is not known to bound a convex set; radcol models occlusion between flat triangles only (set Surface::convex_enclosure when the surface does bound a convex set)")]
     CurvedOcclusion {
@@ -250,6 +268,7 @@ impl InputError {
                 | Self::CompressedTooLarge { .. }
                 | Self::CompressedWontFit { .. }
                 | Self::PairTableTooLarge { .. }
+                | Self::VisibilityPlanTooLarge { .. }
         )
     }
 }

@@ -6,9 +6,11 @@
 //! scanned mesh of thousands of triangles), this is what its triangle count
 //! costs, found in about a hundredth of the assembly's time.
 
+use super::size::usable;
 use crate::assembly::plan::RowCost;
 use crate::assembly::{AssemblyPlan, FillMode, QuadratureOptions};
 use crate::discretization::Discretization;
+use crate::error::InputError;
 use crate::estimate::{check_discretization, ESTIMATE_QUAD_TOL};
 use crate::visibility::VisibilityAnalysis;
 use serde::Serialize;
@@ -120,23 +122,18 @@ impl AssemblyCost {
         visibility: &VisibilityAnalysis,
         samples: usize,
     ) -> Self {
-        let n = disc.mesh().len();
-        let s = samples.clamp(1, n.max(1)).min(n);
-        let picked: Vec<usize> = (0..s).map(|i| (2 * i + 1) * n / (2 * s)).collect();
-        let mut only = vec![false; n];
-        for &k in &picked {
-            only[k] = true;
-        }
-        let threads = rayon::current_num_threads();
+        let (n, threads) = (disc.mesh().len(), rayon::current_num_threads());
+        let (picked, only) = spread(n, samples);
+        let s = picked.len();
         let plan = AssemblyPlan::sampled(disc.clone(), None, quad.clone(), visibility, &only);
-        let assembly = measure(&plan, &picked, n, threads);
+        let assembly = measure(&plan, &picked, n, threads, true);
         let check = Arc::new(check_discretization(disc));
         let check_quad = QuadratureOptions {
             tol: quad.tol.max(ESTIMATE_QUAD_TOL),
             ..quad.clone()
         };
         let plan = AssemblyPlan::sampled(disc.clone(), Some(check), check_quad, visibility, &only);
-        let estimate = measure(&plan, &picked, n, threads);
+        let estimate = measure(&plan, &picked, n, threads, true);
         Self {
             rows: n,
             sampled: s,
@@ -147,13 +144,91 @@ impl AssemblyCost {
     }
 }
 
-/// The sampled rows `picked` of `plan`, each filled once and timed,
-/// extrapolated to `n` rows on `threads` threads.
-fn measure(plan: &AssemblyPlan, picked: &[usize], n: usize, threads: usize) -> MatrixCost {
+/// The assembly plan's pairs and the memory its partly visible pairs will
+/// hold, predicted from `samples` row blocks without filling any (a
+/// solve's check before planning), with the row blocks measured.
+pub fn predict_plan(
+    disc: &Arc<Discretization>,
+    quad: &QuadratureOptions,
+    visibility: &VisibilityAnalysis,
+    samples: usize,
+) -> (MatrixCost, usize) {
+    let (n, threads) = (disc.mesh().len(), rayon::current_num_threads());
+    let (picked, only) = spread(n, samples);
+    let plan = AssemblyPlan::sampled(disc.clone(), None, quad.clone(), visibility, &only);
+    (measure(&plan, &picked, n, threads, false), picked.len())
+}
+
+/// Meshes of at least this many elements in scenes that occlude have the
+/// memory of their plan's candidate lists predicted before it is built
+/// ([`check_plan_memory`]): from 20 000 elements on, they can hold tens of
+/// GB (the 10^5-triangle bunny hall: about 61 GB), and the prediction costs
+/// well under one per cent of the plan.
+pub const PREDICT_PLAN_ABOVE: usize = 20_000;
+
+/// Refuses, before the plan is built, a mesh whose plan would hold
+/// candidate lists larger than the memory `available` allows
+/// ([`predict_plan`] from [`COST_SAMPLE_ROWS`] row blocks; meshes of at
+/// least `above` elements in scenes that occlude only: a solve passes
+/// [`PREDICT_PLAN_ABOVE`]).
+///
+/// # Errors
+/// [`InputError::VisibilityPlanTooLarge`].
+pub fn check_plan_memory(
+    disc: &Arc<Discretization>,
+    quad: &QuadratureOptions,
+    visibility: &VisibilityAnalysis,
+    available: Option<u64>,
+    above: usize,
+) -> Result<(), InputError> {
+    let elements = disc.mesh().len();
+    let Some(available) = available.filter(|_| visibility.needed && elements >= above) else {
+        return Ok(());
+    };
+    let (cost, sampled) = predict_plan(disc, quad, visibility, COST_SAMPLE_ROWS);
+    let bytes = cost.partial_bytes;
+    if bytes.value <= usable(available) {
+        return Ok(());
+    }
+    Err(InputError::VisibilityPlanTooLarge {
+        elements: elements as u64,
+        partial_pairs: cost.pairs_partial.value,
+        relative_error: bytes.std_error / bytes.value,
+        bytes: bytes.value,
+        sampled,
+        available,
+    })
+}
+
+/// `samples` of `n` row blocks spread evenly (all when there are no more),
+/// and a flag per row block.
+fn spread(n: usize, samples: usize) -> (Vec<usize>, Vec<bool>) {
+    let s = samples.clamp(1, n.max(1)).min(n);
+    let picked: Vec<usize> = (0..s).map(|i| (2 * i + 1) * n / (2 * s)).collect();
+    let mut only = vec![false; n];
+    for &k in &picked {
+        only[k] = true;
+    }
+    (picked, only)
+}
+
+/// The sampled rows `picked` of `plan`, each filled once and timed when
+/// `fill`, extrapolated to `n` rows on `threads` threads.
+fn measure(
+    plan: &AssemblyPlan,
+    picked: &[usize],
+    n: usize,
+    threads: usize,
+    fill: bool,
+) -> MatrixCost {
     let width = plan.dim();
     let mut rows: Vec<(RowCost, f64)> = Vec::with_capacity(picked.len());
     let mut block = Vec::new();
     for &kp in picked {
+        if !fill {
+            rows.push((plan.row_cost(kp), 0.0));
+            continue;
+        }
         block.clear();
         block.resize(plan.rows().nodes_per(kp) * width, 0.0);
         let t = Instant::now();

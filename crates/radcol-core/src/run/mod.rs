@@ -23,12 +23,16 @@ mod relight;
 mod size;
 
 pub use config::{SolveConfig, SolverKind, DEFAULT_COMPRESSION_TOL};
-pub use cost::{AssemblyCost, Extrapolated, MatrixCost, COST_SAMPLE_ROWS};
+pub use cost::{
+    check_plan_memory, predict_plan, AssemblyCost, Extrapolated, MatrixCost, COST_SAMPLE_ROWS,
+    PREDICT_PLAN_ABOVE,
+};
 pub use inputs::{check_size, discretize, MAX_EXTENT, MIN_EXTENT};
 pub use operator::{GeometricOperator, OperatorChoice, OperatorDecision, OperatorKind};
 pub use outcome::{ChannelResult, SolveOutcome, SolverReport, Timings};
 pub use pipeline::{solve, solve_on_mesh, true_residual};
 pub use relight::Relighter;
 pub use size::{
-    available_memory, elements, mesh_size, process_memory, MemoryEstimate, MemoryUse, MeshSize,
+    available_memory, elements, mesh_size, process_memory, usable, MemoryEstimate, MemoryUse,
+    MeshSize,
 };

@@ -2,7 +2,7 @@
 //! hierarchical matrix of [`crate::hmatrix`] (the same entries, far blocks
 //! compressed to a relative tolerance), and why.
 
-use super::size::{available_memory, MemoryEstimate, MemoryUse};
+use super::size::{available_memory, usable, MemoryEstimate, MemoryUse};
 use super::{SolveConfig, SolverKind};
 use crate::assembly::plan::Unchanged;
 use crate::assembly::AssemblyPlan;
@@ -172,7 +172,7 @@ pub(crate) fn decide_now(
         }
         OperatorKind::Compressed => {
             let bytes = crate::assembly::pair_table_bytes(elements as f64);
-            if let Some(a) = available.filter(|&a| bytes > (a / 10 * 9) as f64) {
+            if let Some(a) = available.filter(|&a| bytes > usable(a)) {
                 return Err(InputError::PairTableTooLarge {
                     elements,
                     bytes,
@@ -254,16 +254,14 @@ pub(crate) fn predict_compressed(
     let pair_table = crate::assembly::pair_table_bytes(disc.mesh().len() as f64);
     let p = crate::hmatrix::radiosity::predict(disc, &cfg.compression, count_limit(available));
     match available {
-        Some(a) if pair_table + p.bytes() > (a / 10 * 9) as f64 => {
-            Err(InputError::CompressedWontFit {
-                unknowns: disc.len() as u64,
-                operator: p.bytes(),
-                near: p.near_bytes,
-                complete: p.complete,
-                pair_table,
-                available: a,
-            })
-        }
+        Some(a) if pair_table + p.bytes() > usable(a) => Err(InputError::CompressedWontFit {
+            unknowns: disc.len() as u64,
+            operator: p.bytes(),
+            near: p.near_bytes,
+            complete: p.complete,
+            pair_table,
+            available: a,
+        }),
         _ => Ok(p),
     }
 }
@@ -273,7 +271,7 @@ pub(crate) fn predict_compressed(
 /// can say how much coarser would fit; no limit where memory is unknown or
 /// not checked.
 fn count_limit(available: Option<u64>) -> f64 {
-    available.map_or(f64::INFINITY, |a| 4.0 * (a / 10 * 9) as f64)
+    available.map_or(f64::INFINITY, |a| 4.0 * usable(a))
 }
 
 /// Builds the compressed operator from `plan`'s integrators, measures its

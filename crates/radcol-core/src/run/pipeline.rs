@@ -76,6 +76,10 @@ fn assemble(
     if compressed {
         decision.predicted_bytes = Some(predict_compressed(disc, cfg)?.bytes());
     }
+    if previous.is_none() && cfg.check_memory {
+        let (available, above) = (available_memory(), super::PREDICT_PLAN_ABOVE);
+        super::cost::check_plan_memory(disc, &cfg.quad, visibility, available, above)?;
+    }
     let progress = cfg.progress.clone();
     let before = super::size::process_memory().map(|(rss, _)| rss);
     let plan = match previous {

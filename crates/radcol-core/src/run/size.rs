@@ -73,6 +73,12 @@ pub fn available_memory() -> Option<u64> {
         .map(|kb| kb * 1024)
 }
 
+/// Of `available` bytes, what a solve may plan to use: nine tenths (the
+/// rest for the allocator's overhead and what the estimates leave out).
+pub fn usable(available: u64) -> f64 {
+    (available / 10 * 9) as f64
+}
+
 /// The dense matrices of N unknowns against the memory available.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct MemoryEstimate {
@@ -103,7 +109,7 @@ impl MemoryEstimate {
         let n = unknowns as f64;
         let matrix_bytes = 8.0 * n * n;
         // The dense matrices may take nine tenths of what is available.
-        let fits = |bytes: f64| available.is_none_or(|a| bytes <= (a / 10 * 9) as f64);
+        let fits = |bytes: f64| available.is_none_or(|a| bytes <= usable(a));
         Self {
             unknowns,
             matrix_bytes,
@@ -213,7 +219,7 @@ impl MemoryUse {
     pub fn check(&self, available: Option<u64>) -> Result<(), InputError> {
         let to_come = self.predicted_peak_bytes - self.after_plan_bytes;
         match available {
-            Some(a) if to_come > (a / 10 * 9) as f64 => Err(InputError::PeakTooLarge {
+            Some(a) if to_come > usable(a) => Err(InputError::PeakTooLarge {
                 to_come,
                 matrix: self.matrix_bytes,
                 solver: self.solver_bytes,
@@ -248,7 +254,7 @@ impl MemoryUse {
     ) -> Result<(), InputError> {
         let to_come = self.solver_bytes.max(self.estimate_bytes);
         match available {
-            Some(a) if to_come > (a / 10 * 9) as f64 => Err(InputError::CompressedTooLarge {
+            Some(a) if to_come > usable(a) => Err(InputError::CompressedTooLarge {
                 stored: h.heap_bytes() as f64,
                 fraction: h.stats().compression(),
                 to_come,
