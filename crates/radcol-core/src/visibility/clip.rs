@@ -564,6 +564,70 @@ mod tests {
         );
     }
 
+    /// A closed mesh's triangles that face away from P hide nothing more
+    /// than the ones facing it ([`super::super::sealed`]): the visible
+    /// region without them has the same area and moments, for P on the
+    /// mesh itself and for P clear of it, with loose triangles mixed in.
+    #[test]
+    fn a_closed_mesh_hides_with_the_triangles_facing_p() {
+        use super::super::sealed::facing_point;
+        let mut rnd = crate::testing::uniform(0x5eed_5ea1_ed00_0001u64);
+        let v = [
+            DVec3::new(-1., -1., 0.),
+            DVec3::new(2., -1., 0.2),
+            DVec3::new(-1., 2., -0.1),
+        ];
+        let n_v = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+        let (mut filtered, mut partial) = (0, 0);
+        for case in 0..40 {
+            let centre = DVec3::new(rnd() - 0.5, rnd() - 0.5, 0.5 + rnd());
+            let mut tris = polysphere(2, centre, 0.2 + 0.3 * rnd());
+            let sphere = tris.len();
+            for _ in 0..4 {
+                let c = DVec3::new(2.0 * rnd() - 1.0, 2.0 * rnd() - 1.0, 1.5 * rnd());
+                let mut d = || DVec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5);
+                tris.push([c + d(), c + d(), c + d()]);
+            }
+            let occ = Occluders::new(&tris);
+            let c = occ.sealed().component(0).expect("the sphere is closed");
+            assert!((0..sphere as u32).all(|i| occ.sealed().component(i) == Some(c)));
+            // P on a sphere triangle facing the element half the time, else
+            // on a small element above the sphere.
+            let (a, n_a, p) = if case % 2 == 0 {
+                let t = (0..sphere)
+                    .map(|i| occ.get(i as u32))
+                    .find(|t| t.normal.dot(n_v) < -0.3 && rnd() < 0.2)
+                    .unwrap_or(occ.get(0));
+                let (x, y) = (0.1 + 0.4 * rnd(), 0.1 + 0.4 * rnd());
+                (
+                    t.v,
+                    t.normal,
+                    t.v[0] + x * (t.v[1] - t.v[0]) + y * (t.v[2] - t.v[0]),
+                )
+            } else {
+                let p = DVec3::new(2.0 * rnd() - 1.0, 2.0 * rnd() - 1.0, 1.8 + rnd());
+                let a = [p, p + DVec3::X * 0.01, p + DVec3::Y * 0.01];
+                (a, -DVec3::Z, p + DVec3::new(0.003, 0.003, 0.0))
+            };
+            let tol = 1e-9 * occ.scale();
+            if !occ.sealed().starts_in_front(c, occ.all(), &a, n_a, tol) {
+                continue;
+            }
+            let all: Vec<u32> = (0..occ.len() as u32).collect();
+            let fewer = facing_point(&occ, &[c], &all, p);
+            assert!(fewer.len() < all.len(), "case {case}");
+            filtered += 1;
+            let want = moments(&visible_region(p, n_a, &v, &occ, &all));
+            let got = moments(&visible_region(p, n_a, &v, &occ, &fewer));
+            partial += usize::from(want[0] > 1e-3 && want[0] < 0.49);
+            for k in 0..6 {
+                crate::assert_close!(got[k], want[k], 1e-13, "case {case}, moment {k}");
+            }
+        }
+        assert!(filtered >= 36, "only {filtered} of 40 cases filtered");
+        assert!(partial >= 15, "only {partial} cases partly visible");
+    }
+
     /// An occluder behind P or beyond the element hides nothing.
     #[test]
     fn occluders_outside_the_segment_hide_nothing() {

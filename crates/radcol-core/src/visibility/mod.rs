@@ -8,6 +8,7 @@
 pub mod clip;
 mod hull;
 pub mod occluders;
+pub(crate) mod sealed;
 pub(crate) mod walk;
 
 pub use occluders::Occluders;

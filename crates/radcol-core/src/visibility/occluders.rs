@@ -12,6 +12,7 @@
 //! ([`super::clip`]).
 
 use super::hull::{Facets, HullAxes, Place};
+use super::sealed::Sealed;
 use crate::geometry::bounds;
 use glam::{DVec3, Vec3A};
 use obvhs::aabb::Aabb;
@@ -42,6 +43,8 @@ impl Boundable for PaddedBox {
 pub struct Occluders {
     tris: Vec<Occluder>,
     bvh: Bvh2,
+    /// The closed meshes among them.
+    sealed: Sealed,
     /// Diameter of the scene's bounding box: tolerances are relative to it.
     scale: f64,
 }
@@ -95,7 +98,24 @@ impl Occluders {
             BvhBuildParams::medium_build(),
             &mut Duration::default(),
         );
-        Self { tris, bvh, scale }
+        let sealed = Sealed::new(&tris);
+        Self {
+            tris,
+            bvh,
+            sealed,
+            scale,
+        }
+    }
+
+    /// The closed components, and which of their triangles an element's
+    /// segments can meet first ([`Sealed`]).
+    pub(crate) fn sealed(&self) -> &Sealed {
+        &self.sealed
+    }
+
+    /// Every occluder.
+    pub(crate) fn all(&self) -> &[Occluder] {
+        &self.tris
     }
 
     /// Number of occluders.
@@ -123,7 +143,7 @@ impl Occluders {
     /// (point, unit normal): the faces the segments start or end on, and their
     /// coplanar neighbours, which a segment leaving the plane cannot cross.
     pub fn candidates(&self, pts: &[DVec3], own_planes: &[(DVec3, DVec3)], out: &mut Vec<u32>) {
-        self.candidates_with(pts, own_planes, &[], out)
+        self.candidates_with(pts, own_planes, &[], &|_| false, out)
     }
 
     /// The occluders of the pair of non-coplanar triangles `a` and `b` (with
@@ -141,7 +161,22 @@ impl Occluders {
         b: ([DVec3; 3], DVec3),
         out: &mut Vec<u32>,
     ) {
-        self.pair_candidates_in(a, b, None, out)
+        self.pair_candidates_in(a, b, None, &|_| false, out)
+    }
+
+    /// [`Occluders::pair_candidates`] (`among`: None) or
+    /// [`Occluders::pair_candidates_among`], without the exact test of the
+    /// occluders that `skip` leaves out (those of a box taken whole are
+    /// still listed).
+    pub(crate) fn pair_candidates_skipping(
+        &self,
+        a: ([DVec3; 3], DVec3),
+        b: ([DVec3; 3], DVec3),
+        among: Option<&[u32]>,
+        skip: &dyn Fn(u32) -> bool,
+        out: &mut Vec<u32>,
+    ) {
+        self.pair_candidates_in(a, b, among, skip, out)
     }
 
     /// [`Occluders::pair_candidates`] restricted to the occluders `among`
@@ -155,7 +190,7 @@ impl Occluders {
         among: &[u32],
         out: &mut Vec<u32>,
     ) {
-        self.pair_candidates_in(a, b, Some(among), out)
+        self.pair_candidates_in(a, b, Some(among), &|_| false, out)
     }
 
     fn pair_candidates_in(
@@ -163,6 +198,7 @@ impl Occluders {
         (a, na): ([DVec3; 3], DVec3),
         (b, nb): ([DVec3; 3], DVec3),
         among: Option<&[u32]>,
+        skip: &dyn Fn(u32) -> bool,
         out: &mut Vec<u32>,
     ) {
         let ca = (a[0] + a[1] + a[2]) / 3.0;
@@ -179,12 +215,12 @@ impl Occluders {
         let pts = [a[0], a[1], a[2], b[0], b[1], b[2]];
         let planes = [(a[0], na), (b[0], nb)];
         match among {
-            None => self.candidates_with(&pts, &planes, &witnesses, out),
+            None => self.candidates_with(&pts, &planes, &witnesses, skip, out),
             Some(among) => {
                 let mut hull = None;
                 let tol = REL_TOL * self.scale;
                 for &i in among {
-                    if self.meets_hull(i, &pts, &planes, &witnesses, &mut hull, tol) {
+                    if !skip(i) && self.meets_hull(i, &pts, &planes, &witnesses, &mut hull, tol) {
                         out.push(i);
                     }
                 }
@@ -197,6 +233,7 @@ impl Occluders {
         pts: &[DVec3],
         own_planes: &[(DVec3, DVec3)],
         witnesses: &[(DVec3, DVec3)],
+        skip: &dyn Fn(u32) -> bool,
         out: &mut Vec<u32>,
     ) {
         if self.tris.is_empty() {
@@ -215,7 +252,7 @@ impl Occluders {
         };
         let mut hull: Option<HullAxes> = None;
         let test = |i: u32, hull: &mut Option<HullAxes>| {
-            self.meets_hull(i, pts, own_planes, witnesses, hull, tol)
+            !skip(i) && self.meets_hull(i, pts, own_planes, witnesses, hull, tol)
         };
         self.walk(0, &facets, &mut |i| test(i, &mut hull), out);
         out.sort_unstable();

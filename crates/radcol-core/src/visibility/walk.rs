@@ -6,6 +6,7 @@ use super::{clip, Occluders};
 use crate::geometry::barycentric_st;
 use crate::mesh::{Element, Mesh};
 use glam::DVec3;
+use std::cell::RefCell;
 
 /// A flat triangle's mapped vertices and unit normal.
 pub(crate) type Plane = ([DVec3; 3], DVec3);
@@ -17,18 +18,28 @@ pub(crate) struct PartialRow {
     pub(crate) elements: Vec<u32>,
     ranges: Vec<(u32, u32)>,
     candidates: Vec<u32>,
+    /// The closed components from whose front region every segment of the
+    /// row element starts (ascending): their candidates facing away from
+    /// a row point cannot block it ([`super::sealed`]).
+    pub(crate) in_front: Vec<u32>,
 }
 
 impl PartialRow {
     /// Bytes held on the heap.
     pub(crate) fn heap_bytes(&self) -> usize {
-        self.elements.capacity() * 4 + self.ranges.capacity() * 8 + self.candidates.capacity() * 4
+        self.elements.capacity() * 4
+            + self.ranges.capacity() * 8
+            + self.candidates.capacity() * 4
+            + self.in_front.capacity() * 4
     }
 
     /// This row's pairs whose element `map` sends to a new index (the
     /// others dropped), with their candidates; `map` must keep the order.
     pub(crate) fn remapped(&self, map: impl Fn(usize) -> Option<usize>) -> PartialRow {
-        let mut out = PartialRow::default();
+        let mut out = PartialRow {
+            in_front: self.in_front.clone(),
+            ..PartialRow::default()
+        };
         for (i, &k) in self.elements.iter().enumerate() {
             if let Some(nk) = map(k as usize) {
                 let (start, len) = self.ranges[i];
@@ -40,7 +51,15 @@ impl PartialRow {
 
     /// The pairs of both rows (disjoint element sets), ascending.
     pub(crate) fn merged(&self, other: &PartialRow) -> PartialRow {
-        let mut out = PartialRow::default();
+        // Facts about the same row element: either row's hold.
+        let mut in_front = self.in_front.clone();
+        in_front.extend_from_slice(&other.in_front);
+        in_front.sort_unstable();
+        in_front.dedup();
+        let mut out = PartialRow {
+            in_front,
+            ..PartialRow::default()
+        };
         let (mut i, mut j) = (0, 0);
         while i < self.elements.len() || j < other.elements.len() {
             let take_self = j == other.elements.len()
@@ -110,11 +129,20 @@ pub(crate) fn partial_pairs(
         tree,
         live,
         flat_geom,
+        front: RefCell::new(Vec::new()),
     };
     let mut seen = Seen::default();
     for &root in &tree.roots {
         walk.visit(root, None, &mut seen);
     }
+    let mut in_front: Vec<u32> = walk
+        .front
+        .into_inner()
+        .into_iter()
+        .filter_map(|(c, yes)| yes.then_some(c))
+        .collect();
+    in_front.sort_unstable();
+    seen.partial.in_front = in_front;
     seen
 }
 
@@ -238,6 +266,9 @@ struct Walk<'a> {
     tree: &'a RefinementTree,
     live: &'a [bool],
     flat_geom: &'a [Plane],
+    /// Per closed component met so far: whether A's segments start in its
+    /// front region ([`super::sealed::Sealed::starts_in_front`]).
+    front: RefCell<Vec<(u32, bool)>>,
 }
 
 impl Walk<'_> {
@@ -246,11 +277,36 @@ impl Walk<'_> {
     }
 
     fn candidates(&self, b: Plane, among: Option<&[u32]>, out: &mut Vec<u32>) {
-        match among {
-            None => self.occ.pair_candidates(self.a, b, out),
-            Some([]) => {}
-            Some(among) => self.occ.pair_candidates_among(self.a, b, among, out),
+        if among.is_some_and(|a| a.is_empty()) {
+            return;
         }
+        let skip = |i: u32| self.faces_away(i);
+        self.occ
+            .pair_candidates_skipping(self.a, b, among, &skip, out);
+        // Boxes taken whole were not asked.
+        out.retain(|&i| !self.faces_away(i));
+    }
+
+    /// True when occluder `i` belongs to a closed mesh from whose front
+    /// region A's segments start, and faces away from every point of A: it
+    /// cannot be the first of that mesh a segment from A meets, so it
+    /// cannot block one ([`super::sealed`]).
+    fn faces_away(&self, i: u32) -> bool {
+        let sealed = self.occ.sealed();
+        let Some(c) = sealed.component(i) else {
+            return false;
+        };
+        let t = self.occ.get(i);
+        if self.a.0.iter().any(|&x| (x - t.v[0]).dot(t.normal) > 0.0) {
+            return false;
+        }
+        if let Some(&(_, yes)) = self.front.borrow().iter().find(|(k, _)| *k == c) {
+            return yes;
+        }
+        let tol = 1e-9 * self.occ.scale();
+        let yes = sealed.starts_in_front(c, self.occ.all(), &self.a.0, self.a.1, tol);
+        self.front.borrow_mut().push((c, yes));
+        yes
     }
 
     /// True when the occluders `cands` hide triangle `v` from every row

@@ -6,7 +6,7 @@ use super::{AssemblyPlan, FillMode, PairClass};
 use crate::assembly::integrate::{ElementIntegrator, FieldPoint, Integrand, LagrangeBasis};
 use crate::assembly::VisibilityMode;
 use crate::discretization::CollocationPoint;
-use crate::visibility::clip;
+use crate::visibility::{clip, sealed};
 use glam::DVec3;
 
 /// What every run of one row block shares.
@@ -45,7 +45,9 @@ impl AssemblyPlan {
             .occluders
             .as_ref()
             .expect("partial pairs exist only with occluders");
-        let cands = self.partial[kp].candidates_of(k);
+        let row = &self.partial[kp];
+        let cands = sealed::facing_point(occ, &row.in_front, row.candidates_of(k), position);
+        let cands = &cands[..];
         let verts = self.disc.mesh().vertices(k);
         let r = self.disc.degree(k);
         let fp = FieldPoint {
