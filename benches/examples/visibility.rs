@@ -4,8 +4,10 @@
 //! assembled at r = 1 on the scene's own triangles (level 0). For each: the
 //! elements, the partly visible (clipped) pairs, the plan's and the fill's
 //! seconds, and the fill's microseconds per partly visible pair; then the
-//! exponents of those against the bunny's triangle count, fitted over the
-//! run. Wall-clock figures of one run: compare them as ratios within it.
+//! compressed operator of the same plan (tolerance 1e-8): its seconds and
+//! the numbers it stores against the dense N²; then the exponents of those
+//! against the bunny's triangle count and against the elements, fitted over
+//! the run. Wall-clock figures of one run: compare them as ratios within it.
 //!
 //!     cargo run --release -p radcol-benches --example visibility [-- MAX_TRIANGLES]
 //!
@@ -15,6 +17,8 @@
 use radcol_benches::fit_exponent as fit;
 use radcol_core::assembly::{AssemblyBackend, AssemblyPlan, CpuBackend, QuadratureOptions};
 use radcol_core::discretization::Discretization;
+use radcol_core::hmatrix::radiosity::PlanEntries;
+use radcol_core::hmatrix::HOptions;
 use radcol_core::mesh::Mesh;
 use radcol_core::nodes::NodeSet;
 use radcol_core::scene::load_obj;
@@ -35,8 +39,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .map(|&n| (n, root.join(format!("data/bunny_room_{n}.obj"))))
         .collect();
     files.push((3674, root.join("../scenes/bunny_room.obj")));
-    println!("bunny triangles, elements, partly visible pairs, plan s, fill s, fill µs per partly visible pair");
+    println!("bunny triangles, elements, partly visible pairs, plan s, fill s, fill µs per partly visible pair, compressed s, stored numbers, of N²");
     let (mut per_pair, mut fill_s) = (Vec::new(), Vec::new());
+    let (mut stored_t, mut stored_e) = (Vec::new(), Vec::new());
     for (n, path) in files.into_iter().filter(|(n, _)| *n <= max) {
         let scene = load_obj(&path)?;
         let mesh = Arc::new(Mesh::new(scene.surface.clone(), 0));
@@ -50,18 +55,28 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let fill = t.elapsed().as_secs_f64();
         let partial = plan.stats().pairs_partial;
         let us = 1e6 * fill / partial as f64;
+        let t = Instant::now();
+        let h = PlanEntries::new(&plan).build(&HOptions::default());
+        let compressed_s = t.elapsed().as_secs_f64();
+        let stored = h.stats().stored as f64;
+        let nn = (disc.len() as f64).powi(2);
         println!(
-            "{n:>6} {:>6} {partial:>9} {plan_s:>8.2} {fill:>8.2} {us:>8.1}",
-            disc.mesh().len()
+            "{n:>6} {:>6} {partial:>9} {plan_s:>8.2} {fill:>8.2} {us:>8.1} {compressed_s:>8.2} {stored:>11.4e} {:>6.2} %",
+            disc.mesh().len(),
+            100.0 * stored / nn
         );
         per_pair.push((n as f64, us));
         fill_s.push((n as f64, fill));
+        stored_t.push((n as f64, stored));
+        stored_e.push((disc.mesh().len() as f64, stored));
     }
     if per_pair.len() > 1 {
         println!(
-            "exponents against the bunny's triangles: fill {:.2}, per partly visible pair {:.2}",
+            "exponents against the bunny's triangles: fill {:.2}, per partly visible pair {:.2}, compressed numbers {:.2}; compressed numbers against the elements {:.2}",
             fit(&fill_s),
-            fit(&per_pair)
+            fit(&per_pair),
+            fit(&stored_t),
+            fit(&stored_e)
         );
     }
     Ok(())

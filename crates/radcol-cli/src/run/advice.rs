@@ -6,7 +6,7 @@
 use crate::error::{bad_input, with_flags};
 use crate::setup::Setup;
 use radcol_core::error::{Error as CoreError, InputError};
-use radcol_core::run::mesh_size;
+use radcol_core::run::{mesh_size, usable};
 
 /// The t in (0, 1] where an operator of `operator` bytes growing like N and
 /// a pair table of `pair_table` bytes on `elements` elements growing as
@@ -38,22 +38,22 @@ pub fn sized(err: CoreError, s: &Setup) -> anyhow::Error {
             ..
         }) => {
             let per_entry = 8.0 * if *bytes_lu > 0.0 { 2.0 } else { 1.0 };
-            (0.9 * *bytes_available as f64 / per_entry).sqrt()
+            (usable(*bytes_available) / per_entry).sqrt()
         }
         CoreError::Input(InputError::PeakTooLarge {
             to_come,
             matrix,
             available,
             ..
-        }) => (matrix / 8.0).sqrt() * (0.9 * *available as f64 / to_come).sqrt(),
+        }) => (matrix / 8.0).sqrt() * (usable(*available) / to_come).sqrt(),
         // The compressed operator's a priori limit: its table of pair classes.
         CoreError::Input(InputError::PairTableTooLarge { available, .. }) => {
             let per_element = radcol_core::nodes::nodes_per_element(s.cfg.degree) as f64;
-            radcol_core::assembly::pair_table_elements(0.9 * *available as f64) * per_element
+            radcol_core::assembly::pair_table_elements(usable(*available)) * per_element
         }
         // The operator grows like N (its dense blocks near the diagonal),
         // the pair table as pair_table_bytes: the t = N'/N where the two
-        // fill 0.9 of what is available (by bisection: both grow with t).
+        // fill what is usable of what is available (by bisection: both grow with t).
         CoreError::Input(InputError::CompressedWontFit {
             unknowns,
             operator,
@@ -63,7 +63,7 @@ pub fn sized(err: CoreError, s: &Setup) -> anyhow::Error {
         }) => {
             let per_element = radcol_core::nodes::nodes_per_element(s.cfg.degree) as f64;
             let elements = *unknowns as f64 / per_element;
-            let t = shrink_to_fit(*operator, *pair_table, elements, 0.9 * *available as f64);
+            let t = shrink_to_fit(*operator, *pair_table, elements, usable(*available));
             *unknowns as f64 * t
         }
         _ => return with_flags(err),
