@@ -338,106 +338,75 @@ fn crossing(p: DVec3, d: DVec3, t: &Occluder, tol: f64) -> Crossing {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::shapes::room_with_cube;
+    use crate::visibility::{base_triangles, Occluders};
 
-    fn occ(v: [DVec3; 3]) -> Occluder {
-        let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
-        Occluder { v, normal: n }
-    }
-
-    /// The 12 triangles of the box [lo, hi], normals out (or in).
-    pub(crate) fn cube(lo: DVec3, hi: DVec3, inward: bool) -> Vec<Occluder> {
-        let p = |i: usize| {
-            DVec3::new(
-                if i & 1 == 0 { lo.x } else { hi.x },
-                if i & 2 == 0 { lo.y } else { hi.y },
-                if i & 4 == 0 { lo.z } else { hi.z },
-            )
-        };
-        let quads = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        let mut out = Vec::new();
-        for [a, b, c, d] in quads {
-            for t in [[a, b, c], [a, c, d]] {
-                let t = if inward { [t[0], t[2], t[1]] } else { t };
-                out.push(occ(t.map(p)));
-            }
-        }
-        out
+    /// The room [0, 2]³ (normals in, occluders 0..12) and the cube
+    /// [0.7, 1.3]³ (normals out, 12..24) of `room_with_cube`.
+    fn room_and_cube() -> Occluders {
+        Occluders::new(&base_triangles(&room_with_cube()))
     }
 
     #[test]
     fn closed_boxes_are_sealed_and_open_ones_are_not() {
-        let mut tris = cube(DVec3::ZERO, DVec3::ONE, false);
-        tris.extend(cube(DVec3::splat(-5.0), DVec3::splat(5.0), true));
-        // An open box: one face missing.
-        let mut open = cube(DVec3::splat(2.0), DVec3::splat(3.0), false);
-        open.truncate(10);
-        tris.extend(open);
+        let occ = room_and_cube();
+        let mut tris = occ.all().to_vec();
+        // An open box: the cube moved, one face missing.
+        let shift = DVec3::new(0.5, 0.0, 0.0);
+        tris.extend(occ.all()[12..22].iter().map(|t| Occluder {
+            v: t.v.map(|x| x + shift),
+            normal: t.normal,
+        }));
         let s = Sealed::new(&tris);
         assert_eq!(s.len(), 2);
         assert!((0..24).all(|i| s.component(i).is_some()));
         assert!((24..34).all(|i| s.component(i).is_none()));
-        let (c0, c1) = (s.component(0).unwrap(), s.component(12).unwrap());
-        assert!(s.comps[c0 as usize].outward && !s.comps[c1 as usize].outward);
+        let (room, cube) = (s.component(0).unwrap(), s.component(12).unwrap());
+        assert!(!s.comps[room as usize].outward && s.comps[cube as usize].outward);
     }
 
-    /// Which elements get the shortcut for a unit cube (normals out) and a
+    /// Which elements get the shortcut for the cube (normals out) and the
     /// room around it (normals in).
     #[test]
     fn elements_start_in_front_only_where_that_is_certain() {
-        let mut tris = cube(DVec3::ZERO, DVec3::ONE, false);
-        tris.extend(cube(DVec3::splat(-5.0), DVec3::splat(5.0), true));
-        let s = Sealed::new(&tris);
-        let (cube_c, room_c) = (s.component(0).unwrap(), s.component(12).unwrap());
+        let occ = room_and_cube();
+        let s = occ.sealed();
+        let (room, cube) = (s.component(0).unwrap(), s.component(12).unwrap());
         let tol = 1e-9;
         let tri = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| {
             let v = [DVec3::from(a), DVec3::from(b), DVec3::from(c)];
             let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
             (v, n)
         };
-        let check = |(v, n): ([DVec3; 3], DVec3), c: u32| s.starts_in_front(c, &tris, &v, n, tol);
-        // A part of one of the cube's triangles (z = 0, facing -z).
-        let on_face = tri([0.1, 0.3, 0.0], [0.1, 0.6, 0.0], [0.3, 0.6, 0.0]);
+        let check =
+            |(v, n): ([DVec3; 3], DVec3), c: u32| s.starts_in_front(c, occ.all(), &v, n, tol);
+        // A part of one of the cube's triangles (z = 0.7, facing -z).
+        let on_face = tri([0.75, 0.85, 0.7], [0.75, 1.0, 0.7], [0.85, 1.0, 0.7]);
         assert!(on_face.1.z < -0.999);
-        assert!(check(on_face, cube_c));
+        assert!(check(on_face, cube));
         // The same place facing the other way (into the cube): no.
         let (v, n) = on_face;
-        assert!(!check(([v[0], v[2], v[1]], -n), cube_c));
-        // Far from the cube, outside it: yes; inside the cube: no.
-        assert!(check(
-            tri([3.0, 0.0, 0.0], [3.0, 1.0, 0.0], [3.0, 0.0, 1.0]),
-            cube_c
-        ));
-        assert!(check(
-            tri([0.5, 0.5, 1.5], [0.7, 0.5, 1.5], [0.5, 0.7, 1.5]),
-            cube_c
-        ));
+        assert!(!check(([v[0], v[2], v[1]], -n), cube));
+        // Clear of the cube, outside it: yes; inside the cube: no.
+        let beside = tri([1.6, 0.1, 0.1], [1.6, 0.3, 0.1], [1.6, 0.1, 0.3]);
+        assert!(check(beside, cube));
         assert!(!check(
-            tri([0.3, 0.3, 0.5], [0.6, 0.3, 0.5], [0.3, 0.6, 0.5]),
-            cube_c
+            tri([0.9, 0.9, 1.0], [1.1, 0.9, 1.0], [0.9, 1.1, 1.0]),
+            cube
         ));
-        // Touching the cube (a floor under it, in the plane of its bottom): no.
-        let floor = tri([-2.0, -2.0, 0.0], [2.0, -2.0, 0.0], [-2.0, 2.0, 0.0]);
-        assert!(!check(floor, cube_c));
+        // Touching the cube (a floor in the plane of its bottom): no.
+        let floor = tri([0.5, 0.5, 0.7], [1.5, 0.5, 0.7], [0.5, 1.5, 0.7]);
+        assert!(!check(floor, cube));
         // Cutting through the cube: no.
         assert!(!check(
-            tri([0.5, 0.5, -1.0], [0.5, 0.5, 2.0], [2.0, 0.5, 0.5]),
-            cube_c
+            tri([1.0, 1.0, 0.5], [1.0, 1.0, 1.5], [1.5, 1.0, 1.0]),
+            cube
         ));
         // Inside the room (its front region): yes; outside it: no.
-        assert!(check(
-            tri([3.0, 0.0, 0.0], [3.0, 1.0, 0.0], [3.0, 0.0, 1.0]),
-            room_c
-        ));
+        assert!(check(beside, room));
         assert!(!check(
-            tri([7.0, 0.0, 0.0], [7.0, 1.0, 0.0], [7.0, 0.0, 1.0]),
-            room_c
+            tri([2.5, 0.5, 0.5], [2.5, 0.7, 0.5], [2.5, 0.5, 0.7]),
+            room
         ));
     }
 }
