@@ -82,7 +82,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     std::fs::write(&out, &obj.text)?;
-    std::fs::write(&mtl, MATERIALS)?;
+    // The bunny room's materials: the Cornell box's.
+    let materials = root.join("scenes/bunny_room.mtl");
+    std::fs::copy(&materials, &mtl).map_err(|e| format!("{}: {e}", materials.display()))?;
     println!(
         "{}: {} triangles ({count} bunnies of {}), {width} x {depth} x {HEIGHT} mm",
         out.display(),
@@ -91,20 +93,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     Ok(())
 }
-
-/// The Cornell box's materials (B. Bitterli, "Rendering Resources", 2016).
-const MATERIALS: &str =
-    "# The Cornell box's materials (B. Bitterli, \"Rendering Resources\", 2016).
-newmtl white
-Kd 0.725 0.71 0.68
-newmtl red
-Kd 0.63 0.065 0.05
-newmtl green
-Kd 0.14 0.45 0.091
-newmtl light
-Kd 0.78 0.78 0.78
-Ke 17 12 4
-";
 
 /// An OBJ file being written.
 #[derive(Default)]
