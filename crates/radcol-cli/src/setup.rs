@@ -12,17 +12,7 @@ use radcol_core::assembly::AssemblyBackend;
 use radcol_core::camera::Camera;
 use radcol_core::problem::{Field, Problem, ReferenceOperator};
 use radcol_core::render::{RenderOptions, ToneMap};
-use radcol_core::run::SolveConfig;
-
-/// Refinement level of the reference mesh that manufactures E = u - K u.
-const REFERENCE_LEVEL: u32 = 2;
-
-/// Level of `radcol solve` when none is given.
-const DEFAULT_LEVEL: u32 = 2;
-
-/// Scenes with materials given neither --level nor --max-edge are refined to
-/// edges of at most this fraction of their bounding box's diagonal.
-const DEFAULT_EDGE_FRACTION: f64 = 0.1;
+use radcol_core::run::{SolveConfig, StartMesh, REFERENCE_LEVEL};
 
 /// The node parameter and how it was chosen.
 #[derive(Clone, Debug)]
@@ -101,33 +91,17 @@ pub fn load(spec: &SceneSpec) -> Result<Loaded> {
     Ok(loaded)
 }
 
-/// The level and maximum edge to use: as given (level 0 under `--max-edge`
-/// alone), else [`DEFAULT_LEVEL`], or for
-/// a scene with materials given neither, level 0 with edges of at most
-/// [`DEFAULT_EDGE_FRACTION`] of its bounding box's diagonal — or, when the
-/// mesh is to be refined `adaptive`ly, the scene's own triangles: the loop
-/// puts the unknowns where the error is, and a uniform start only adds
-/// unknowns it does not need (`radcol solve cornell --target-error 1e-3`:
-/// 7 710 unknowns and 71 s from the 50 triangles, against 17 052 unknowns
-/// and 5 min 48 s from the uniform default).
+/// The level and maximum edge to use: the library's
+/// [`StartMesh::resolve`], with the scene's diagonal when it has materials.
 pub fn default_refinement(
     loaded: &Loaded,
     level: Option<u32>,
     max_edge: Option<f64>,
     adaptive: bool,
 ) -> (u32, Option<f64>) {
-    match (level, max_edge, loaded.scene()) {
-        (None, None, Some(_)) if adaptive => (0, None),
-        (None, None, Some(scene)) => {
-            let (lo, hi) = scene.bounding_box();
-            (0, Some(DEFAULT_EDGE_FRACTION * (hi - lo).length()))
-        }
-        // --max-edge alone refines the scene's own triangles to H: a uniform
-        // level under it would only add elements the bound does not ask for
-        // (it used to be level 2, silently: 16x the triangles first).
-        (None, Some(h), _) => (0, Some(h)),
-        (level, max_edge, _) => (level.unwrap_or(DEFAULT_LEVEL), max_edge),
-    }
+    let diagonal = loaded.scene().map(|s| s.diagonal());
+    let m = StartMesh::resolve(diagonal, level, max_edge, adaptive);
+    (m.level, m.max_edge)
 }
 
 /// Builds what `solve` and `study` need from `p`: the scene, α, the problem,
@@ -336,6 +310,42 @@ mod tests {
     fn auto_alpha_is_alpha0_for_odd_degree() {
         radcol_core::assert_close!(resolve_alpha(AlphaSpec::Auto, 1).value, 1.0 / 6.0, 1e-15);
         assert_eq!(resolve_alpha(AlphaSpec::Value(0.1), 2).value, 0.1);
+    }
+
+    /// The solve configuration the command builds from `args` (CPU
+    /// backend, which no configuration field depends on).
+    fn configured(args: &[&str]) -> (SolveConfig, Option<radcol_core::run::adapt::AdaptOptions>) {
+        use clap::Parser;
+        let argv = ["radcol", "solve", "--backend", "cpu"].iter().chain(args);
+        let cli = crate::args::Cli::try_parse_from(argv).expect("arguments parse");
+        let crate::validate::Config::Solve(job) =
+            crate::validate::Config::from_cli(cli).expect("arguments are valid")
+        else {
+            panic!("a solve job");
+        };
+        let s = setup(&job.problem, job.level, job.max_edge, job.adapt.is_some()).unwrap();
+        (s.cfg, job.adapt)
+    }
+
+    /// The command given no flag builds the library's default
+    /// configuration: `SolveConfig::default()` on a surface, the scene's
+    /// `solve_config` on a scene, adaptive or not, and
+    /// `AdaptOptions::default()` with the target.
+    #[test]
+    fn no_flags_build_the_library_defaults() {
+        use radcol_core::run::adapt::AdaptOptions;
+        let same =
+            |a: &SolveConfig, b: &SolveConfig| assert_eq!(format!("{a:?}"), format!("{b:?}"));
+        same(&configured(&["sphere"]).0, &SolveConfig::default());
+        let cornell = radcol_core::scene::builtin("cornell").unwrap().unwrap();
+        same(&configured(&["cornell"]).0, &cornell.solve_config(false));
+        let (cfg, adapt) = configured(&["cornell", "--target-error", "1e-2"]);
+        same(&cfg, &cornell.solve_config(true));
+        let target = AdaptOptions {
+            target: 1e-2,
+            ..AdaptOptions::default()
+        };
+        assert_eq!(adapt, Some(target));
     }
 
     #[test]

@@ -245,13 +245,20 @@ impl Alpha0Report {
     }
 }
 
-/// [`Alpha0Report::auto_alpha`] of degree `r` (searches α0; callers that
-/// also need the report should call [`find_alpha0`] once and keep it).
+/// [`Alpha0Report::auto_alpha`] of degree `r`: the search runs once per
+/// degree and process (degrees up to [`crate::nodes::MAX_DEGREE`]; callers
+/// that also need the report should call [`find_alpha0`] once and keep it).
 pub fn auto_alpha(r: usize) -> f64 {
+    use std::sync::OnceLock;
+    static AUTO: [OnceLock<f64>; crate::nodes::MAX_DEGREE + 1] =
+        [const { OnceLock::new() }; crate::nodes::MAX_DEGREE + 1];
     if r == 0 {
         return 0.1;
     }
-    find_alpha0(r).auto_alpha()
+    match AUTO.get(r) {
+        Some(cell) => *cell.get_or_init(|| find_alpha0(r).auto_alpha()),
+        None => find_alpha0(r).auto_alpha(),
+    }
 }
 
 /// Bisection to full double precision on a bracket with a sign change.

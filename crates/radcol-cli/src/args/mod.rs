@@ -2,6 +2,9 @@
 //! turning them into core types (and rejecting bad values) is `config.rs`'s job.
 
 use clap::{Args, Parser, Subcommand};
+use radcol_core::assembly::QuadratureOptions;
+use radcol_core::run::{ADAPTIVE_DEGREE, DEFAULT_COMPRESSION_TOL, DEFAULT_DEGREE};
+use radcol_core::solve::GmresParams;
 
 mod solve;
 mod values;
@@ -22,6 +25,11 @@ pi, + - * / and ^ (or **), parentheses, and sin cos tan asin acos atan sinh cosh
 log (natural; also ln) log10 sqrt abs. Precedence is the one on paper: ^ binds tighter than a \
 sign and groups to the right, so -z^2 = -(z^2), 2^3^2 = 2^9 and 2^-1 = 0.5; * and / bind \
 tighter than + and -, and both group to the left (8/4/2 = 1). Write 2*x, not 2x.";
+
+/// A library default as the help shows it: `1e-12`, not `0.000000000001`.
+fn sci(x: f64) -> String {
+    format!("{x:e}")
+}
 
 /// Collocation for the radiosity equation u - (ρ/π) ∫ G u = E on curved and
 /// polyhedral surfaces (Atkinson-Chien collocation with Micula's α0 nodes).
@@ -84,10 +92,10 @@ pub struct ProblemArgs {
     #[arg(value_name = "SCENE", long_help = format!("The surface: {SCENES}."))]
     pub scene: String,
 
-    /// Polynomial degree r of the collocation space, 0..=6 [default: 1; for `solve
-    /// --target-error`, 2: fewer unknowns and seconds than r = 1 to 1e-3 and 1e-4 on the
-    /// Cornell box and the shadowed floor].
-    #[arg(help_heading = "Method", long, short = 'r', value_name = "R")]
+    /// Polynomial degree r of the collocation space.
+    #[arg(help_heading = "Method", long, short = 'r', value_name = "R",
+          help = format!("Polynomial degree r of the collocation space, 0..=6 [default: \
+{DEFAULT_DEGREE}; for `solve --target-error`, {ADAPTIVE_DEGREE} (docs/accuracy.md)]"))]
     pub degree: Option<usize>,
 
     /// Node parameter α in (0, 1/3), or `auto`: of the α at which the node rule gains a
@@ -178,7 +186,7 @@ pub struct ProblemArgs {
         help_heading = "Linear system",
         long,
         value_name = "T",
-        default_value = "1e-8"
+        default_value = sci(DEFAULT_COMPRESSION_TOL)
     )]
     pub compression_tol: f64,
 
@@ -187,7 +195,7 @@ pub struct ProblemArgs {
         help_heading = "Linear system",
         long,
         value_name = "T",
-        default_value = "1e-12"
+        default_value = sci(GmresParams::default().rel_tol)
     )]
     pub tol: f64,
 
@@ -196,7 +204,7 @@ pub struct ProblemArgs {
         help_heading = "Linear system",
         long,
         value_name = "M",
-        default_value_t = 60
+        default_value_t = GmresParams::default().restart
     )]
     pub restart: usize,
 
@@ -205,7 +213,7 @@ pub struct ProblemArgs {
         help_heading = "Linear system",
         long,
         value_name = "N",
-        default_value_t = 2000
+        default_value_t = GmresParams::default().max_iters
     )]
     pub max_iters: usize,
 
@@ -215,7 +223,7 @@ pub struct ProblemArgs {
         help_heading = "Assembly",
         long,
         value_name = "Q",
-        default_value = "1e-12"
+        default_value = sci(QuadratureOptions::default().tol)
     )]
     pub quad_tol: f64,
 
@@ -295,7 +303,7 @@ pub struct StudyArgs {
 #[derive(Debug, Args)]
 pub struct NodesArgs {
     /// Polynomial degree r, 0..=6.
-    #[arg(long, short = 'r', value_name = "R", default_value_t = 1)]
+    #[arg(long, short = 'r', value_name = "R", default_value_t = DEFAULT_DEGREE)]
     pub degree: usize,
 
     /// Node parameter α in (0, 1/3), or `auto` (the best conditioned α that lifts the
@@ -316,7 +324,7 @@ pub struct InfoArgs {
     pub scene: String,
 
     /// Polynomial degree r, 0..=6 (for the unknowns and memory estimate).
-    #[arg(long, short = 'r', value_name = "R", default_value_t = 1)]
+    #[arg(long, short = 'r', value_name = "R", default_value_t = DEFAULT_DEGREE)]
     pub degree: usize,
 
     /// Refinement level [default: as for solve].

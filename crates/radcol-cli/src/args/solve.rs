@@ -2,6 +2,11 @@
 
 use super::{ProblemArgs, TonemapArg, VerticesArg};
 use clap::Args;
+use radcol_core::query::DEFAULT_SNAP;
+use radcol_core::render::lightmap::DEFAULT_LIGHTMAP_SIZE;
+use radcol_core::render::RenderOptions;
+use radcol_core::run::adapt::AdaptOptions;
+use radcol_core::run::{DEFAULT_EDGE_FRACTION, DEFAULT_LEVEL};
 use std::path::PathBuf;
 
 /// `radcol solve`.
@@ -10,11 +15,13 @@ pub struct SolveArgs {
     #[command(flatten)]
     pub problem: ProblemArgs,
 
-    /// Refinement level: each level splits every triangle into 4 (8 elements at level 0 on
-    /// a sphere or ellipsoid, 12 on a box, the file's triangles for a scene) [default: 2;
-    /// 0 with --max-edge; for a scene with materials given neither --level nor --max-edge:
-    /// level 0 and --max-edge a tenth of its bounding box's diagonal].
-    #[arg(help_heading = "Mesh", long, short = 'l', value_name = "L")]
+    /// Refinement level.
+    #[arg(help_heading = "Mesh", long, short = 'l', value_name = "L", help = format!(
+        "Refinement level: each level splits every triangle into 4 (8 elements at level 0 on \
+a sphere or ellipsoid, 12 on a box, the file's triangles for a scene) [default: \
+{DEFAULT_LEVEL}; 0 with --max-edge; for a scene with materials given neither --level nor \
+--max-edge: level 0 and --max-edge {DEFAULT_EDGE_FRACTION} of its bounding box's diagonal, \
+or with --target-error its own triangles]"))]
     pub level: Option<u32>,
 
     /// After the uniform --level (0 when --level is not given), keep splitting elements 4:1
@@ -28,14 +35,12 @@ pub struct SolveArgs {
     )]
     pub max_edge: Option<f64>,
 
-    /// Refine adaptively until the estimated max error relative to max |u| is at most TOL
-    /// (in (0, 1)): elements whose estimate is large are split 4:1 and the problem
-    /// re-solved, starting from --level/--max-edge (a scene with materials given neither:
-    /// its own triangles). Where the error stops falling under refinement (four splits that
-    /// lowered an element's estimate by less than 0.85 each on average: the foot of a
-    /// block's corner on a floor), or below 1e-5 of the scene's diagonal, elements are no
-    /// longer split; the loop then stops when the rest is below TOL and names those points
-    /// [default: uniform refinement only].
+    /// Refine adaptively until the estimated max error relative to max |u| is at most TOL,
+    /// in (0, 1): the elements with the largest estimates are split 4:1 and the problem
+    /// re-solved, from --level/--max-edge (a scene with materials given neither: its own
+    /// triangles). Points where the error stops falling under refinement (the foot of a
+    /// block on a floor) are named in the report and left out of the target
+    /// (docs/accuracy.md) [default: uniform refinement only].
     #[arg(
         help_heading = "Accuracy",
         long,
@@ -54,12 +59,14 @@ pub struct SolveArgs {
     )]
     pub max_unknowns: Option<u64>,
 
-    /// With --target-error: stop after N solves [default: 25].
+    /// With --target-error: stop after N solves.
     #[arg(
         help_heading = "Accuracy",
         long,
         value_name = "N",
-        requires = "target_error"
+        requires = "target_error",
+        help = format!("With --target-error: stop after N solves [default: {}]",
+                       AdaptOptions::default().max_steps)
     )]
     pub max_steps: Option<usize>,
 
@@ -97,13 +104,14 @@ pub struct SolveArgs {
     )]
     pub relight: Vec<String>,
 
-    /// Evaluate u_n and the iterated solution û_n = E + K u_n (superconvergent on smooth
-    /// surfaces, shadows clipped exactly) at the points of FILE.csv, with the estimated
-    /// error of their elements: rows x,y,z or x,y,z,nx,ny,nz (the normal picks the face at
-    /// an edge), or a header row naming columns x, y, z [nx, ny, nz] [label]. Points are
-    /// taken onto the surface from up to 1e-3 of the scene's diagonal away. The values are
-    /// in the report (text and JSON), or in --at-out.
-    #[arg(help_heading = "Output", long, value_name = "FILE.csv")]
+    /// Evaluate u_n and the iterated solution û_n at the points of FILE.csv.
+    #[arg(help_heading = "Output", long, value_name = "FILE.csv", help = format!(
+        "Evaluate u_n and the iterated solution û_n = E + K u_n (superconvergent on smooth \
+surfaces, shadows clipped exactly) at the points of FILE.csv, with the estimated error of \
+their elements: rows x,y,z or x,y,z,nx,ny,nz (the normal picks the face at an edge), or a \
+header row naming columns x, y, z [nx, ny, nz] [label]. Points are taken onto the surface \
+from up to {DEFAULT_SNAP:e} of the scene's diagonal away. The values are in the report \
+(text and JSON), or in --at-out."))]
     pub at: Option<PathBuf>,
 
     /// Write the --at values to FILE.csv (a row per point: label, x, y, z, element,
@@ -135,20 +143,23 @@ pub struct SolveArgs {
     pub camera: Option<String>,
 
     /// Image width in pixels.
-    #[arg(help_heading = "Image", long, value_name = "PX", default_value_t = 640)]
+    #[arg(help_heading = "Image", long, value_name = "PX",
+          default_value_t = RenderOptions::default().width)]
     pub width: u32,
 
     /// Image height in pixels.
-    #[arg(help_heading = "Image", long, value_name = "PX", default_value_t = 480)]
+    #[arg(help_heading = "Image", long, value_name = "PX",
+          default_value_t = RenderOptions::default().height)]
     pub height: u32,
 
-    /// Rays (samples) per pixel: a square count on a regular grid, any other
-    /// on a low-discrepancy set [default: 4]
+    /// Rays (samples) per pixel.
     #[arg(
         help_heading = "Image",
         long,
         value_name = "N",
-        conflicts_with = "samples"
+        conflicts_with = "samples",
+        help = format!("Rays (samples) per pixel: a square count on a regular grid, any \
+other on a low-discrepancy set [default: {}]", RenderOptions::default().samples_per_pixel)
     )]
     pub spp: Option<u32>,
 
@@ -188,9 +199,10 @@ pub struct SolveArgs {
     #[arg(help_heading = "Output", long)]
     pub lightmap_unwrap: bool,
 
-    /// Lightmap width and height in texels (16..=16384); given alone, .glb/.gltf outputs
-    /// are lightmapped without a separate file [default: 1024].
-    #[arg(help_heading = "Output", long, value_name = "N")]
+    /// Lightmap width and height in texels.
+    #[arg(help_heading = "Output", long, value_name = "N", help = format!(
+        "Lightmap width and height in texels (16..=16384); given alone, .glb/.gltf outputs \
+are lightmapped without a separate file [default: {DEFAULT_LIGHTMAP_SIZE}]"))]
     pub lightmap_size: Option<u32>,
 
     /// Lightmap texel density in texels per scene unit of length, instead of a size: the

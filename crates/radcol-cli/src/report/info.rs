@@ -165,7 +165,7 @@ impl InfoReport {
             return writeln!(
                 w,
                 "  dense matrix    more than {} (does NOT fit); available {avail}",
-                gib(8.0 * (n as f64).powi(2))
+                gib(radcol_core::run::dense_bytes(n))
             );
         }
         writeln!(w, "  unknowns        {} at r = {}", i.unknowns, i.degree)?;

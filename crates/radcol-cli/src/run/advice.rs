@@ -6,7 +6,7 @@
 use crate::error::{bad_input, with_flags};
 use crate::setup::Setup;
 use radcol_core::error::{Error as CoreError, InputError};
-use radcol_core::run::{mesh_size, usable};
+use radcol_core::run::{mesh_size, usable, MemoryBudget};
 
 /// The t in (0, 1] where an operator of `operator` bytes growing like N and
 /// a pair table of `pair_table` bytes on `elements` elements growing as
@@ -37,8 +37,11 @@ pub fn sized(err: CoreError, s: &Setup) -> anyhow::Error {
             bytes_available,
             ..
         }) => {
-            let per_entry = 8.0 * if *bytes_lu > 0.0 { 2.0 } else { 1.0 };
-            (usable(*bytes_available) / per_entry).sqrt()
+            let copies = if *bytes_lu > 0.0 { 2.0 } else { 1.0 };
+            let budget = MemoryBudget {
+                available: Some(*bytes_available),
+            };
+            budget.largest_dense(copies).unwrap_or(u64::MAX) as f64
         }
         CoreError::Input(InputError::PeakTooLarge {
             to_come,

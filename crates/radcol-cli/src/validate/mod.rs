@@ -7,9 +7,10 @@ mod numbers;
 mod outputs;
 mod points;
 
-pub use numbers::{parse_alpha, parse_levels, ADAPTIVE_DEGREE};
+pub use numbers::{parse_alpha, parse_levels};
 pub use outputs::{LookSpec, Output, OutputFile, OutputKind};
 pub use points::PointsSpec;
+use radcol_core::run::{ADAPTIVE_DEGREE, DEFAULT_DEGREE};
 
 use crate::args::{
     BackendArg, Cli, Command, InfoArgs, NodesArgs, OperatorArg, PrecisionArg, ProblemArgs,
@@ -377,7 +378,7 @@ fn problem(p: &ProblemArgs, adaptive: bool) -> Result<ProblemSpec> {
     mesh::scene_flags(p, &scene)?;
     let default_degree = match adaptive {
         true => ADAPTIVE_DEGREE,
-        false => 1,
+        false => DEFAULT_DEGREE,
     };
     let degree = degree(p.degree.unwrap_or(default_degree))?;
     let alpha = parse_alpha(&p.alpha)?;

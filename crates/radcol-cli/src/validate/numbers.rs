@@ -6,17 +6,6 @@ use crate::error::{bad_input, BadInput};
 use radcol_core::nodes::{check_alpha, check_degree};
 use std::ops::RangeInclusive;
 
-/// The degree of `radcol solve --target-error` when `--degree` is not given.
-/// Measured, adaptive runs to 1e-2, 1e-3 and 1e-4 (docs/accuracy.md, "Which degree
-/// with a target"): on the Cornell box r = 2 reached 1e-3 with 6 078
-/// unknowns against 6 963 at r = 1 and 7 640 at r = 3, and 1e-4 in about
-/// 10 minutes, where r = 1 ran out of memory and r = 3 was at 3.3e-4 after 7
-/// (r = 2 then at 3.0e-4);
-/// on the shadowed floor r = 2 took 2.2–3.8× fewer unknowns than r = 1 to
-/// 1e-3 (square occluder: 4 824 against 10 854, 1.28 s against 2.98 s).
-/// Uniform refinement keeps r = 1.
-pub const ADAPTIVE_DEGREE: usize = 2;
-
 /// `--degree R` in 0..=6 (the range is core's).
 pub(super) fn degree(r: usize) -> Result<usize, BadInput> {
     check_degree(r).map_err(|e| bad_input(format!("--degree {r}: {e}")))

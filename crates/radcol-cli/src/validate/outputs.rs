@@ -93,8 +93,8 @@ pub struct LookSpec {
     pub input_vertices: Option<radcol_core::render::Corners>,
 }
 
-/// The lightmap's size or density when one is asked for (1024 texels a
-/// side by default).
+/// The lightmap's size or density when one is asked for
+/// ([`Resolution::default`] when neither is given).
 fn lightmap_size(a: &SolveArgs) -> Result<Option<Resolution>, BadInput> {
     if let Some(n) = a.lightmap_size.filter(|n| !(16..=16384).contains(n)) {
         return Err(bad_input(format!(
@@ -109,7 +109,7 @@ fn lightmap_size(a: &SolveArgs) -> Result<Option<Resolution>, BadInput> {
     let asked = !a.lightmap.is_empty() || a.lightmap_size.is_some() || a.lightmap_density.is_some();
     Ok(asked.then(|| match (a.lightmap_size, a.lightmap_density) {
         (_, Some(d)) => Resolution::Density(d),
-        (n, None) => Resolution::Size(n.unwrap_or(1024)),
+        (n, None) => n.map_or_else(Resolution::default, Resolution::Size),
     }))
 }
 

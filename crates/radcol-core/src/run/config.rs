@@ -23,7 +23,9 @@ pub enum SolverKind {
     Lu,
 }
 
-/// Everything that sets up one discretization and solve.
+/// Everything that sets up one discretization and solve. Its `Default`
+/// is what `radcol solve` runs on a surface given no flag;
+/// [`SolveConfig::recommended`] gives that for scenes and adaptive solves.
 #[derive(Clone, Debug)]
 pub struct SolveConfig {
     /// Polynomial degree r (0..=6).
@@ -65,9 +67,11 @@ pub struct SolveConfig {
 impl Default for SolveConfig {
     fn default() -> Self {
         Self {
-            degree: 1,
-            alpha: 1.0 / 6.0,
-            level: 2,
+            degree: super::DEFAULT_DEGREE,
+            // α0(1) = 1/6 as the search finds it (to 5e-16), so that the
+            // command's `--alpha auto` and this agree to the last bit.
+            alpha: crate::alpha0::auto_alpha(super::DEFAULT_DEGREE),
+            level: super::DEFAULT_LEVEL,
             solver: SolverKind::Gmres,
             gmres: GmresParams::default(),
             quad: QuadratureOptions::default(),

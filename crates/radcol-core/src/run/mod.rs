@@ -15,6 +15,7 @@
 pub mod adapt;
 mod config;
 mod cost;
+mod defaults;
 mod inputs;
 pub mod operator;
 mod outcome;
@@ -27,12 +28,16 @@ pub use cost::{
     check_plan_memory, predict_plan, AssemblyCost, Extrapolated, MatrixCost, COST_SAMPLE_ROWS,
     PREDICT_PLAN_ABOVE,
 };
+pub use defaults::{
+    StartMesh, ADAPTIVE_DEGREE, DEFAULT_DEGREE, DEFAULT_EDGE_FRACTION, DEFAULT_LEVEL,
+    REFERENCE_LEVEL,
+};
 pub use inputs::{check_size, discretize, MAX_EXTENT, MIN_EXTENT};
 pub use operator::{GeometricOperator, OperatorChoice, OperatorDecision, OperatorKind};
 pub use outcome::{ChannelResult, SolveOutcome, SolverReport, Timings};
 pub use pipeline::{solve, solve_on_mesh, true_residual};
 pub use relight::Relighter;
 pub use size::{
-    available_memory, elements, mesh_size, process_memory, usable, MemoryEstimate, MemoryUse,
-    MeshSize,
+    available_memory, dense_bytes, elements, mesh_size, process_memory, usable, MemoryBudget,
+    MemoryEstimate, MemoryUse, MeshSize,
 };

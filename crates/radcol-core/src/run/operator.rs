@@ -212,7 +212,7 @@ pub(crate) fn lighter_than_dense(
     if !decision.switchable || to_come <= DENSE_COMFORT * available {
         return None;
     }
-    let dense = 8.0 * (disc.len() as f64).powi(2);
+    let dense = super::dense_bytes(disc.len() as u64);
     let pair_table = crate::assembly::pair_table_bytes(disc.mesh().len() as f64);
     let limit = LIGHTER * dense - pair_table;
     let p = crate::hmatrix::radiosity::predict(disc, &cfg.compression, limit.max(0.0));
@@ -474,7 +474,7 @@ mod tests {
         let n = plates.len() as u64;
         let dense = decide(&auto, n, Some(u64::MAX)).unwrap();
         assert!(dense.switchable);
-        let to_come = 8.0 * (n as f64).powi(2);
+        let to_come = crate::run::dense_bytes(n as u64);
         let tight = Some((1.5 * to_come) as u64);
         let c = lighter_than_dense(&dense, &plates, &auto, to_come, tight).unwrap();
         assert_eq!(c.kind, OperatorKind::Compressed);
@@ -495,7 +495,7 @@ mod tests {
         .unwrap();
         assert!(lighter_than_dense(&asked, &plates, &auto, to_come, tight).is_none());
         let cornell = disc("cornell", 0, Some(120.0));
-        let to_come = 8.0 * (cornell.len() as f64).powi(2);
+        let to_come = crate::run::dense_bytes(cornell.len() as u64);
         let tight = Some((1.5 * to_come) as u64);
         assert!(lighter_than_dense(&dense, &cornell, &auto, to_come, tight).is_none());
     }

@@ -79,6 +79,46 @@ pub fn usable(available: u64) -> f64 {
     (available / 10 * 9) as f64
 }
 
+/// Bytes of a dense N × N matrix of f64: 8 N².
+pub fn dense_bytes(unknowns: u64) -> f64 {
+    8.0 * (unknowns as f64).powi(2)
+}
+
+/// What a solve may spend of the machine's memory: the one place that
+/// says how much of what is available may be planned for ([`usable`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct MemoryBudget {
+    /// Bytes available (MemAvailable), when known; unknown means no limit.
+    pub available: Option<u64>,
+}
+
+impl MemoryBudget {
+    /// The memory available now ([`available_memory`]).
+    pub fn now() -> Self {
+        Self {
+            available: available_memory(),
+        }
+    }
+
+    /// The bytes that may be planned for ([`usable`]; infinite when the
+    /// available memory is unknown).
+    pub fn usable(&self) -> f64 {
+        self.available.map_or(f64::INFINITY, usable)
+    }
+
+    /// Whether `bytes` fit in [`MemoryBudget::usable`].
+    pub fn fits(&self, bytes: f64) -> bool {
+        bytes <= self.usable()
+    }
+
+    /// The most unknowns whose `copies` dense matrices fit (None: no
+    /// limit known).
+    pub fn largest_dense(&self, copies: f64) -> Option<u64> {
+        self.available
+            .map(|a| (usable(a) / (8.0 * copies)).sqrt().floor() as u64)
+    }
+}
+
 /// The dense matrices of N unknowns against the memory available.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct MemoryEstimate {
@@ -106,10 +146,9 @@ impl MemoryEstimate {
     /// The estimate for `unknowns` with `available` bytes (None: unknown,
     /// and then everything is taken to fit).
     pub fn with_available(unknowns: u64, available: Option<u64>) -> Self {
-        let n = unknowns as f64;
-        let matrix_bytes = 8.0 * n * n;
-        // The dense matrices may take nine tenths of what is available.
-        let fits = |bytes: f64| available.is_none_or(|a| bytes <= usable(a));
+        let matrix_bytes = dense_bytes(unknowns);
+        let budget = MemoryBudget { available };
+        let fits = |bytes: f64| budget.fits(bytes);
         Self {
             unknowns,
             matrix_bytes,
@@ -195,7 +234,7 @@ impl MemoryUse {
     ) -> Self {
         let n = unknowns as f64;
         let after_plan_bytes = process_memory().map_or(0.0, |(rss, _)| rss as f64);
-        let matrix_bytes = 8.0 * n * n;
+        let matrix_bytes = dense_bytes(unknowns as u64);
         let solver_bytes = match solver {
             SolverKind::Lu => matrix_bytes,
             SolverKind::Gmres => 8.0 * n * krylov as f64,
@@ -276,6 +315,22 @@ impl MemoryUse {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The largest dense size of a budget is the last that fits, for one
+    /// matrix and for a matrix with its LU copy.
+    #[test]
+    fn the_largest_dense_size_is_the_last_that_fits() {
+        let budget = MemoryBudget {
+            available: Some(23_000_000_000),
+        };
+        for copies in [1.0, 2.0] {
+            let n = budget.largest_dense(copies).unwrap();
+            assert!(budget.fits(copies * dense_bytes(n)), "{n}");
+            assert!(!budget.fits(copies * dense_bytes(n + 1)), "{n}");
+        }
+        assert_eq!(MemoryBudget { available: None }.largest_dense(1.0), None);
+        assert!(MemoryBudget { available: None }.fits(f64::MAX));
+    }
 
     #[test]
     fn the_peak_is_the_matrix_and_the_larger_of_solver_and_estimate() {

@@ -356,6 +356,18 @@ impl Scene {
         self.surface.bounding_box()
     }
 
+    /// The diagonal of [`Scene::bounding_box`].
+    pub fn diagonal(&self) -> f64 {
+        let (lo, hi) = self.bounding_box();
+        (hi - lo).length()
+    }
+
+    /// What `radcol solve` runs on this scene given no flag (`adaptive`:
+    /// with a target error): [`crate::run::SolveConfig::recommended`].
+    pub fn solve_config(&self, adaptive: bool) -> crate::run::SolveConfig {
+        crate::run::SolveConfig::recommended(Some(self.diagonal()), adaptive)
+    }
+
     /// Number of triangles.
     pub fn triangle_count(&self) -> usize {
         self.surface.base_triangle_count()

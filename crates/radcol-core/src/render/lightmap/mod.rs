@@ -50,6 +50,16 @@ pub enum Resolution {
     Density(f64),
 }
 
+/// The lightmap's width and height when neither a size nor a density is
+/// given: a 1024² atlas holds a room's walls at a few millimetres a texel.
+pub const DEFAULT_LIGHTMAP_SIZE: u32 = 1024;
+
+impl Default for Resolution {
+    fn default() -> Self {
+        Resolution::Size(DEFAULT_LIGHTMAP_SIZE)
+    }
+}
+
 /// One chart of the atlas: the triangles of one patch.
 #[derive(Clone, Debug)]
 pub struct Chart {

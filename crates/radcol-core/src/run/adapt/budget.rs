@@ -51,7 +51,7 @@ pub(super) fn budget(
             return !cfg.check_memory
                 || available.is_none_or(|a| pairs <= STEP_MEMORY_FRACTION * a as f64);
         }
-        let bytes = (1.0 + solver) * 8.0 * (n as f64).powi(2);
+        let bytes = (1.0 + solver) * crate::run::dense_bytes(n);
         !cfg.check_memory || available.is_none_or(|a| bytes <= STEP_MEMORY_FRACTION * a as f64)
     };
     let unknowns = |split: usize| after[split];
