@@ -158,6 +158,13 @@ pub fn setup(
             problem
         }
     };
+    if loaded.scene().is_none() && !problem.emits() && !adaptive {
+        // A scene says so in its own warnings; an adaptive solve refuses.
+        eprintln!(
+            "warning: {}: the emission is zero: the solution is zero everywhere",
+            surface.name
+        );
+    }
     let cfg = SolveConfig {
         degree: p.degree,
         alpha: alpha.value,

@@ -1030,6 +1030,38 @@ fn scene_input_errors_name_the_file_and_line() {
 
 /// A scene with materials and no --level/--max-edge is refined to edges of a
 /// tenth of its bounding box's diagonal; either flag turns that off.
+/// Nothing emits: a solve warns that its solution is zero, and a solve to
+/// a target error refuses in one line (the target is relative to max |u|).
+#[test]
+fn a_problem_without_emission_is_warned_about_or_refused() {
+    let out = radcol_ok(&[
+        "solve",
+        "sphere",
+        "--emission",
+        "0",
+        "--level",
+        "0",
+        "--backend",
+        "cpu",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("warning: sphere: the emission is zero"),
+        "{stderr}"
+    );
+    let args = [
+        "solve",
+        "sphere",
+        "--emission",
+        "0",
+        "--target-error",
+        "1e-2",
+        "--backend",
+        "cpu",
+    ];
+    assert_one_line_error(&args, 2, &["nothing emits light"]);
+}
+
 #[test]
 fn scenes_get_a_default_refinement() {
     let v = stdout_json(&radcol(&["solve", "plates", "--backend", "cpu", "--json"]));

@@ -140,6 +140,9 @@ pub enum InputError {
         /// The target asked for.
         value: f64,
     },
+    /// A target error asked of a problem where nothing emits light.
+    #[error("nothing emits light (the emission is zero in every channel): u = 0 everywhere, so a target error relative to max |u| cannot be measured; give the scene an emitter")]
+    NoEmission,
     /// An adaptive size floor outside [0, 1).
     #[error("smallest element size {value} must lie in [0, 1): it is a fraction of the diagonal of the scene's bounding box")]
     MinSize {

@@ -40,6 +40,17 @@ impl fmt::Debug for Field {
 }
 
 impl Field {
+    /// True when the field is zero everywhere by construction (a zero
+    /// constant, or zero on every patch); expressions and functions are
+    /// not inspected.
+    pub fn is_zero(&self) -> bool {
+        match self {
+            Field::Constant(v) => *v == 0.0,
+            Field::PerPatch(v) => v.iter().all(|&x| x == 0.0),
+            Field::Expr(_) | Field::Custom(_) => false,
+        }
+    }
+
     /// The field times `k`.
     pub fn scaled(&self, k: f64) -> Field {
         match self {
@@ -116,6 +127,12 @@ pub struct Problem {
 }
 
 impl Problem {
+    /// Whether anything may emit light: false when every channel's
+    /// emission is zero by construction ([`Field::is_zero`]), and then u = 0.
+    pub fn emits(&self) -> bool {
+        !self.channels.iter().all(|c| c.emission.is_zero())
+    }
+
     /// Multiplies every channel's emission by `k` (for example π, to read
     /// emission given as radiance as the exitance the equation takes).
     pub fn scale_emission(&mut self, k: f64) {

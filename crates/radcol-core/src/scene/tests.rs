@@ -46,7 +46,9 @@ fn square(extra: &str) -> String {
 }
 
 /// `s` without the warning that no two of its triangles face each other,
-/// which a lone square (most scenes here) must carry as its last warning.
+/// which a lone square (most scenes here) must carry as its last warning,
+/// and, when nothing of it emits, without the warning that says so just
+/// before.
 fn alone(mut s: Scene) -> Scene {
     assert_eq!(
         s.warnings.pop().as_deref(),
@@ -54,7 +56,40 @@ fn alone(mut s: Scene) -> Scene {
         "{:?}",
         s.warnings
     );
+    if !s.problem().emits() {
+        assert_eq!(
+            s.warnings.pop().as_deref(),
+            Some(super::validate::NO_EMITTER),
+            "{:?}",
+            s.warnings
+        );
+    }
     s
+}
+
+/// A scene none of whose triangles emits is warned about (its solution is
+/// zero), one with an emitter is not; an emitting material that no
+/// triangle uses does not count.
+#[test]
+fn a_scene_without_emitters_is_warned_about() {
+    let unlit = "newmtl white\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\nKe 1 1 1\n";
+    let (_, r) = load(&square(""), unlit);
+    let s = r.unwrap();
+    assert!(!s.problem().emits());
+    assert!(
+        s.warnings.iter().any(|w| w == super::validate::NO_EMITTER),
+        "{:?}",
+        s.warnings
+    );
+    let lit = square("v 0 0 1\nv 1 0 1\nv 1 1 1\ng lamp\nusemtl lamp\nf 7 6 5\n");
+    let (_, r) = load(&lit, unlit);
+    let s = r.unwrap();
+    assert!(s.problem().emits());
+    assert!(
+        !s.warnings.iter().any(|w| w == super::validate::NO_EMITTER),
+        "{:?}",
+        s.warnings
+    );
 }
 
 #[test]
@@ -283,9 +318,10 @@ fn t_junctions_and_non_manifold_edges_warn() {
     // nothing and is named.
     let (p, r) = load(&square("v 0 0 1\nf 1 3 5\n"), MTL);
     let s = r.unwrap();
-    assert_eq!(s.warnings.len(), 2, "{:?}", s.warnings);
+    assert_eq!(s.warnings.len(), 3, "{:?}", s.warnings);
+    assert_eq!(s.warnings[1], super::validate::NO_EMITTER);
     assert!(
-        s.warnings[1].starts_with(&format!("{}:9 (group 'floor'): its front", f(&p))),
+        s.warnings[2].starts_with(&format!("{}:9 (group 'floor'): its front", f(&p))),
         "{:?}",
         s.warnings
     );

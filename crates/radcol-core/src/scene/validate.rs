@@ -10,6 +10,9 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 
+/// The warning of a scene none of whose triangles emits.
+pub(super) const NO_EMITTER: &str = "no triangle's material emits light (every Ke or emissive factor is zero): the solution is zero everywhere until an emission is given (relighting can give one)";
+
 /// One input triangle before checks.
 #[derive(Clone, Debug)]
 pub(crate) struct RawTriangle {
@@ -159,6 +162,9 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
         }
     }
     t_junctions(&tris, &kept, scale, &mut warnings);
+    if !kept.iter().any(|t| materials[t.material].is_emitter()) {
+        warnings.push(NO_EMITTER.to_string());
+    }
     super::facing::facing_nothing(&tris, &kept, &materials, scale, &mut warnings);
     let (kept, imprinted) = super::imprint::contact_lines(kept, scale);
 

@@ -34,7 +34,7 @@ pub use options::{
 use super::pipeline::{solve_step, PerElement, Plans, Previous};
 use super::{discretize, OperatorKind, SolveConfig, SolveOutcome, Timings};
 use crate::assembly::{AssemblyBackend, Unchanged};
-use crate::error::Error;
+use crate::error::{Error, InputError};
 use crate::mesh::Mesh;
 use crate::problem::Problem;
 use budget::budget;
@@ -147,6 +147,9 @@ pub fn solve_adaptive(
     mut on_step: impl FnMut(&AdaptStep),
 ) -> Result<AdaptOutcome, Error> {
     opts.check()?;
+    if !problem.emits() {
+        return Err(InputError::NoEmission.into());
+    }
     hp::check_backend(opts.hp, backend)?;
     let cfg = SolveConfig {
         estimate: true,

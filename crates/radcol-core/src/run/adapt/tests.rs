@@ -96,6 +96,31 @@ fn options_out_of_range_are_refused() {
     .is_ok());
 }
 
+/// A problem where nothing emits is refused before any assembly: u = 0,
+/// and a target relative to max |u| cannot be measured.
+#[test]
+fn a_problem_without_emission_is_refused() {
+    use crate::problem::{Field, Problem};
+    let room = std::sync::Arc::new(box_room(1.0, 1.0, 1.0));
+    let dark = Problem::new(room.clone(), Field::Constant(0.5), Field::Constant(0.0));
+    let cfg = SolveConfig::default();
+    let run = |p: &Problem| {
+        solve_adaptive(
+            p,
+            &cfg,
+            &AdaptOptions::default(),
+            &crate::assembly::CpuBackend,
+            |_| {},
+        )
+    };
+    assert!(matches!(
+        run(&dark),
+        Err(Error::Input(InputError::NoEmission))
+    ));
+    let lit = Problem::new(room, Field::Constant(0.5), Field::Constant(1.0));
+    assert!(lit.emits());
+}
+
 /// The budget splits the worst elements that fit, and says why none fit.
 #[test]
 fn budget_caps_the_split() {
