@@ -60,7 +60,13 @@ pub fn with_flags(err: CoreError) -> anyhow::Error {
         CoreError::Input(e @ InputError::CompressionTolerance { .. }) => {
             bad_input(format!("--compression-tol: {e}")).into()
         }
-        CoreError::Input(e @ InputError::CompressedLu) => bad_input(e.to_string()).into(),
+        CoreError::Input(e @ InputError::CompressedLu) => bad_input(format!(
+            "{e} (flags: --solver gmres with --operator compressed, or --operator dense)"
+        ))
+        .into(),
+        CoreError::Input(e @ InputError::HpBackend { .. }) => {
+            bad_input(format!("{e} (flags: --backend cpu, or leave out --hp)")).into()
+        }
         CoreError::Input(e @ InputError::PeakTooLarge { .. }) => bad_input(format!(
             "{e} (flags: --level, --max-edge, --degree, --no-estimate, --solver gmres)"
         ))

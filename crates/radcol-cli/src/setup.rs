@@ -260,11 +260,19 @@ impl Look {
         surface: &radcol_core::geometry::Surface,
         resolution: radcol_core::render::lightmap::Resolution,
     ) -> Result<radcol_core::render::lightmap::Atlas, radcol_core::render::RenderError> {
+        use radcol_core::render::RenderError;
         radcol_core::render::lightmap::Atlas::layout(
             surface,
             self.lightmap_uvs.as_deref(),
             resolution,
         )
+        .map_err(|e| match e {
+            // The scene's own layout refused: the flag that generates one.
+            RenderError::Lightmap(m) if self.lightmap_uvs.is_some() => {
+                RenderError::Lightmap(format!("{m} (flag: --lightmap-unwrap)"))
+            }
+            e => e,
+        })
     }
 }
 

@@ -151,7 +151,7 @@ pub enum InputError {
     },
     /// A degree per element asked for with a backend that takes one node
     /// set per assembly.
-    #[error("a degree per element (hp) needs the CPU backend: the {backend} backend's far-field shader takes one node set per assembly; use --backend cpu, or leave out --hp")]
+    #[error("a degree per element (hp) needs the CPU backend: the {backend} backend's far-field shader takes one node set per assembly; assemble on the CPU (`CpuBackend`), or leave out hp (`AdaptOptions::hp`)")]
     HpBackend {
         /// The backend asked for.
         backend: String,
@@ -163,7 +163,7 @@ pub enum InputError {
         value: f64,
     },
     /// LU asked for with a compressed operator.
-    #[error("LU factors the dense matrix, and the compressed operator does not store one: use --solver gmres with --operator compressed, or --operator dense")]
+    #[error("LU factors the dense matrix, and the compressed operator does not store one: solve the compressed operator with GMRES (`SolverKind::Gmres`), or choose the dense operator (`OperatorChoice::Dense`)")]
     CompressedLu,
     /// The compressed operator, once built, leaves too little memory for
     /// the rest of the solve.

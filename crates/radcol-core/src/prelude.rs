@@ -8,7 +8,7 @@
 //! let scene = builtin("cornell").expect("a built-in scene")?;
 //! let config = SolveConfig { degree: 1, level: 0, ..Default::default() };
 //! let outcome = solve(&scene.problem(), &config, &CpuBackend)?;
-//! let at = [QueryPoint { position: glam::DVec3::new(278.0, 0.0, 280.0), normal: None }];
+//! let at = [QueryPoint { position: DVec3::new(278.0, 0.0, 280.0), normal: None }];
 //! let values = query(&scene.problem(), &outcome, config.quad.clone(), &at, DEFAULT_SNAP)?;
 //! assert!(values[0].channels.iter().all(|c| c.iterated > 0.0));
 //! let shown: Vec<&Solution> = outcome.channels.iter().map(|c| c.shown()).collect();
@@ -20,6 +20,7 @@
 
 pub use crate::assembly::{CpuBackend, QuadratureOptions};
 pub use crate::camera::Camera;
+pub use crate::error::InputError;
 pub use crate::problem::{Field, Problem};
 pub use crate::progress::{Progress, ProgressHandle};
 pub use crate::query::{query, PointEvaluator, PointValues, QueryError, QueryPoint, DEFAULT_SNAP};
@@ -29,11 +30,17 @@ pub use crate::render::{
     ToneMap, VertexMesh,
 };
 pub use crate::run::adapt::{solve_adaptive, AdaptOptions, AdaptOutcome, AdaptStep, StopReason};
-pub use crate::run::{solve, Relighter, SolveConfig, SolveOutcome, SolverKind};
+pub use crate::run::{
+    solve, MemoryBudget, OperatorChoice, Relighter, SolveConfig, SolveOutcome, SolverKind,
+    StartMesh,
+};
 pub use crate::scene::{
-    builtin, load_gltf, load_obj, Scene, SceneBuilder, SceneError, TriangleOrigin,
+    builtin, load_gltf, load_obj, Material, Scene, SceneBuilder, SceneError, TriangleOrigin,
 };
 pub use crate::solution::Solution;
+/// The vector types of every position and normal (`DVec3`), re-exported so
+/// that a program needs no glam dependency of its own.
+pub use glam::{self, DVec3};
 
 use std::path::Path;
 

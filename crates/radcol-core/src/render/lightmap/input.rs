@@ -57,7 +57,7 @@ impl Atlas {
                     return bad(format!(
                         "{}: texture coordinate {x} outside [0, 1]: a lightmap's layout lies in the \
                          unit square (tiling sets are not); give the scene a lightmap set \
-                         (glTF TEXCOORD_1) or --lightmap-unwrap",
+                         (glTF TEXCOORD_1) or generate a layout (`Atlas::new`)",
                         at()
                     ));
                 }
@@ -66,7 +66,7 @@ impl Atlas {
                 if plane_of(patch, tri, scale)?.is_some() && a == 0.0 {
                     return bad(format!(
                         "{}: its texture coordinates have no area, so it would get no texel; \
-                         give the scene a lightmap set (glTF TEXCOORD_1) or --lightmap-unwrap",
+                         give the scene a lightmap set (glTF TEXCOORD_1) or generate a layout (`Atlas::new`)",
                         at()
                     ));
                 }
@@ -215,7 +215,7 @@ impl Overlap {
         Err(RenderError::Lightmap(format!(
             "the input's texture coordinates overlap: {} texels lie inside two triangles (first {} \
              and {}); a lightmap needs each texel in one place: give the scene a lightmap set \
-             (glTF TEXCOORD_1) or --lightmap-unwrap",
+             (glTF TEXCOORD_1) or generate a layout (`Atlas::new`)",
             self.count,
             name(a),
             name(b)
