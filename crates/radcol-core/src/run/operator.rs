@@ -474,7 +474,7 @@ mod tests {
         let n = plates.len() as u64;
         let dense = decide(&auto, n, Some(u64::MAX)).unwrap();
         assert!(dense.switchable);
-        let to_come = crate::run::dense_bytes(n as u64);
+        let to_come = crate::run::dense_bytes(n);
         let tight = Some((1.5 * to_come) as u64);
         let c = lighter_than_dense(&dense, &plates, &auto, to_come, tight).unwrap();
         assert_eq!(c.kind, OperatorKind::Compressed);
