@@ -7,6 +7,7 @@
 //! integration MODULE::` (for example `visibility::`), and add
 //! `-- --nocapture` for the measured figures.
 
+mod bounce;
 mod box_constant;
 mod contact;
 mod cost;

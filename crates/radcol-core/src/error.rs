@@ -140,6 +140,12 @@ pub enum InputError {
         /// The target asked for.
         value: f64,
     },
+    /// A visibility budget outside [0, 1).
+    #[error("visibility budget {value} must lie in [0, 1): it is the unoccluded share of a point's view whose visibility may be approximated (0: none)")]
+    VisibilityBudget {
+        /// The budget asked for.
+        value: f64,
+    },
     /// A target error asked of a problem where nothing emits light.
     #[error("nothing emits light (the emission is zero in every channel): u = 0 everywhere, so a target error relative to max |u| cannot be measured; give the scene an emitter")]
     NoEmission,

@@ -127,6 +127,19 @@ pub struct Problem {
 }
 
 impl Problem {
+    /// The largest reflectance over every channel, when the fields say it
+    /// without evaluation (constants and per-patch values); None when a
+    /// channel's ρ is an expression or a function.
+    pub fn rho_bound(&self) -> Option<f64> {
+        self.channels
+            .iter()
+            .try_fold(0.0f64, |most, c| match &c.rho {
+                Field::Constant(r) => Some(most.max(*r)),
+                Field::PerPatch(v) => Some(v.iter().copied().fold(most, f64::max)),
+                Field::Expr(_) | Field::Custom(_) => None,
+            })
+    }
+
     /// Whether anything may emit light: false when every channel's
     /// emission is zero by construction ([`Field::is_zero`]), and then u = 0.
     pub fn emits(&self) -> bool {

@@ -248,7 +248,10 @@ pub fn query(
                     ChannelValue {
                         u,
                         iterated: fields.emission.eval(&site) + fields.rho.eval(&site) * ku,
-                        estimate: ch.estimate.as_ref().map(|e| e.elements[at.element]),
+                        estimate: ch
+                            .estimate
+                            .as_ref()
+                            .map(|e| e.elements[at.element] + e.visibility_bound),
                     }
                 })
                 .collect();

@@ -231,8 +231,8 @@ pub struct ProblemArgs {
     #[arg(help_heading = "Assembly", long, value_enum, default_value_t = BackendArg::Auto)]
     pub backend: BackendArg,
 
-    /// Partly visible pairs in scenes that occlude: exact clipping, or rays per
-    /// quadrature point (for comparison).
+    /// Partly visible pairs in scenes that occlude: exact clipping, rays per quadrature
+    /// point (for comparison), or approximate (bounded, added to the estimate).
     #[arg(help_heading = "Assembly", long, value_enum, default_value_t = VisibilityArg::Clip)]
     pub visibility: VisibilityArg,
 

@@ -51,6 +51,10 @@ pub enum VisibilityArg {
     Clip,
     /// With a ray per quadrature point (the textbook way; errors ~1e-3 at shadow edges).
     Rays,
+    /// Clipped where the light comes from (emitters) and where a pair holds much of a
+    /// point's view; elsewhere a few rays per pair, within a budget whose bound is added to
+    /// the error estimate (docs/visibility.md).
+    Approximate,
 }
 
 /// Arithmetic precision on the GPU.

@@ -25,6 +25,13 @@ pub(super) fn fmt_estimate(
             .unwrap_or_default(),
         e.updated_within.map(updated).unwrap_or_default()
     )?;
+    if e.visibility_bound > 0.0 {
+        writeln!(
+            f,
+            "              of which approximate visibility: at most {} of max|u| (bound, included)",
+            sci(e.visibility_bound / e.scale.max(f64::MIN_POSITIVE))
+        )?;
+    }
     let negative = e.negative_nodes + e.negative_points;
     if negative > 0 {
         writeln!(

@@ -54,6 +54,10 @@ pub struct AssemblyWork {
     pairs_self: u64,
     pairs_culled: u64,
     pairs_partial: u64,
+    /// Of the partly visible pairs, those whose visibility is approximated.
+    pairs_approximate: u64,
+    /// The largest bounded share of a row point's view approximated.
+    visibility_bound: f64,
     far_kernel_evals: u64,
     device_s: Option<f64>,
 }
@@ -190,6 +194,8 @@ impl SolveReport {
                 pairs_self: p.pairs_self,
                 pairs_culled: p.pairs_culled,
                 pairs_partial: p.pairs_partial,
+                pairs_approximate: p.pairs_approximate,
+                visibility_bound: p.visibility_bound,
                 far_kernel_evals: p.far_kernel_evals,
                 device_s: out.device_seconds,
             },
@@ -250,8 +256,15 @@ impl SolveReport {
         };
         let partial = if self.visibility.needed {
             let how = match self.settings.visibility {
-                VisibilityMode::Clip => "clipped",
-                VisibilityMode::Rays => "rays per quadrature point",
+                VisibilityMode::Clip => "clipped".to_string(),
+                VisibilityMode::Rays => "rays per quadrature point".to_string(),
+            };
+            let how = match a.pairs_approximate {
+                0 => how,
+                n => format!(
+                    "{how}; {n} of them approximated by rays, a row's bounded share of the view at most {}",
+                    sci(a.visibility_bound)
+                ),
             };
             format!(", {} partly visible ({how})", a.pairs_partial)
         } else {

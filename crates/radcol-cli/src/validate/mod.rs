@@ -445,8 +445,12 @@ fn problem(p: &ProblemArgs, adaptive: bool) -> Result<ProblemSpec> {
         quad: QuadratureOptions {
             tol: quad_tol,
             visibility: match p.visibility {
-                VisibilityArg::Clip => VisibilityMode::Clip,
+                VisibilityArg::Clip | VisibilityArg::Approximate => VisibilityMode::Clip,
                 VisibilityArg::Rays => VisibilityMode::Rays,
+            },
+            visibility_budget: match p.visibility {
+                VisibilityArg::Approximate => radcol_core::run::DEFAULT_VISIBILITY_BUDGET,
+                VisibilityArg::Clip | VisibilityArg::Rays => 0.0,
             },
             ..QuadratureOptions::default()
         },

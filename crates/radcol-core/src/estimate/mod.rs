@@ -149,6 +149,15 @@ pub struct ErrorEstimate {
     /// (absolute) η, each element's figure and `max` can be from the
     /// computed ones.
     pub updated_within: Option<f64>,
+    /// With approximate visibility of bounce pairs: at most how far
+    /// (absolute) the approximation can have moved the solution,
+    /// ρ_max B max|u_n| / (1 − ρ_max) with B the largest sum of the
+    /// approximated pairs' mass bounds at a node or check point
+    /// ([`crate::visibility::bounce`]); already added to `max` and
+    /// `max_rel`, not to the element figures (they rank the elements for
+    /// refinement, which does not lower it; a point's estimate is its
+    /// element's plus this). 0 when every pair is exact.
+    pub visibility_bound: f64,
     /// ∫_S G V u_n / π at every check point (ordered like the check rows):
     /// û_n = E + ρ · this. What the next step's update starts from.
     #[serde(skip)]
@@ -160,6 +169,24 @@ pub struct ErrorEstimate {
 }
 
 impl ErrorEstimate {
+    /// Adds what approximate visibility can have moved the solution: with
+    /// `mass` the largest sum of approximated mass bounds at a row point
+    /// (the residual there moved by at most ρ · mass · max|u|) and
+    /// `rho_max` the largest reflectance (the error's amplification is at
+    /// most 1 / (1 − ρ_max)), [`ErrorEstimate::visibility_bound`] is
+    /// ρ_max · mass · scale / (1 − ρ_max), added to `max` (not to the
+    /// element figures, which rank elements for refinement).
+    pub fn add_visibility_bound(&mut self, rho_max: f64, mass: f64) {
+        if mass <= 0.0 {
+            return;
+        }
+        let bound = rho_max * mass * self.scale / (1.0 - rho_max);
+        self.visibility_bound += bound;
+        self.max += bound;
+        let s = if self.scale > 0.0 { self.scale } else { 1.0 };
+        self.max_rel = self.max / s;
+    }
+
     /// Per element, `elements / scale`.
     pub fn elements_rel(&self) -> impl Iterator<Item = f64> + '_ {
         let s = if self.scale > 0.0 { self.scale } else { 1.0 };
@@ -174,7 +201,12 @@ impl ErrorEstimate {
     /// limiter's change on the limited elements, which is added to their
     /// figures.
     pub fn shown_max_rel(&self) -> f64 {
-        self.elements_rel().fold(self.max_rel, f64::max)
+        // Every point's figure carries the approximate visibility's bound.
+        let s = if self.scale > 0.0 { self.scale } else { 1.0 };
+        let bound = self.visibility_bound / s;
+        self.elements_rel()
+            .map(|e| e + bound)
+            .fold(self.max_rel, f64::max)
     }
 }
 
@@ -358,6 +390,7 @@ fn summarise(
         elements,
         negative,
         updated_within: None,
+        visibility_bound: 0.0,
         check_ku: Vec::new(),
         check_ku_drift: 0.0,
     }

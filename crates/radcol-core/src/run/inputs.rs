@@ -12,6 +12,7 @@ use crate::mesh::grading::{Grading, GRADE_RANGE};
 use crate::mesh::Mesh;
 use crate::nodes::NodeSet;
 use crate::problem::{Field, Problem};
+use crate::visibility::VisibilityAnalysis;
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -98,6 +99,33 @@ fn check_extent(surface: &crate::geometry::Surface) -> Result<(), InputError> {
         });
     }
     Ok(())
+}
+
+/// The surface's visibility analysis ([`crate::visibility::analyze`]),
+/// refused when radcol cannot model it; with a visibility budget, the
+/// patches whose pairs may be approximated: those where no channel emits.
+pub(crate) fn visibility_of(
+    problem: &Problem,
+    cfg: &SolveConfig,
+) -> Result<VisibilityAnalysis, InputError> {
+    let analysis = crate::visibility::analyze(&problem.surface);
+    analysis.check_supported()?;
+    let budget = cfg.quad.visibility_budget;
+    if !(0.0..1.0).contains(&budget) {
+        return Err(InputError::VisibilityBudget { value: budget });
+    }
+    if budget == 0.0 {
+        return Ok(analysis);
+    }
+    let patches = problem.surface.patches.len();
+    let dark = |j: usize| {
+        problem.channels.iter().all(|c| match &c.emission {
+            Field::Constant(e) => *e == 0.0,
+            Field::PerPatch(v) => v[j] == 0.0,
+            Field::Expr(_) | Field::Custom(_) => false,
+        })
+    };
+    Ok(analysis.with_bounce_patches((0..patches).map(dark).collect()))
 }
 
 /// Refuses a quadrature tolerance outside [MIN_QUAD_TOL, 1).

@@ -1,6 +1,6 @@
 //! The stages of one solve (see the module overview in [`super`]).
 
-use super::inputs::{check_quadrature, discretize, fields};
+use super::inputs::{check_quadrature, discretize, fields, visibility_of};
 use super::operator::{
     build_compressed, decide_now, lighter_than_dense, predict_compressed, GeometricOperator,
     OperatorDecision, OperatorKind,
@@ -21,7 +21,7 @@ use crate::nodes::NodeSet;
 use crate::norms::error_norms;
 use crate::problem::Problem;
 use crate::solve::LinearOperator;
-use crate::visibility::{self, VisibilityAnalysis};
+use crate::visibility::VisibilityAnalysis;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -191,7 +191,7 @@ fn settle(
 fn estimate_channels(
     problem: &Problem,
     cfg: &SolveConfig,
-    visibility: &VisibilityAnalysis,
+    (visibility, assembly_bound): (&VisibilityAnalysis, f64),
     channels: &mut [ChannelResult],
     previous: Option<&Previous<'_>>,
     guess: Option<&[Vec<f64>]>,
@@ -229,7 +229,12 @@ fn estimate_channels(
         .zip(guess)
         .and_then(|(p, g)| update(&plan, &inputs, p, g));
     let estimates = updated.unwrap_or_else(|| estimate(&plan, &inputs));
-    for (ch, e) in channels.iter_mut().zip(estimates) {
+    // Approximate visibility: the most the residual at a node or check
+    // point can have moved, per unit of ρ max|u| (0 when exact).
+    let mass = assembly_bound.max(plan.stats().visibility_bound);
+    for ((ch, mut e), (rho, _)) in channels.iter_mut().zip(estimates).zip(&check_fields) {
+        let rho_max = ch.rho.iter().chain(rho).copied().fold(0.0, f64::max);
+        e.add_visibility_bound(rho_max, mass);
         ch.estimate = Some(e);
     }
     if let Some(p) = &cfg.progress {
@@ -277,8 +282,7 @@ pub fn solve(
     backend: &dyn AssemblyBackend,
 ) -> Result<SolveOutcome, Error> {
     let t0 = Instant::now();
-    let visibility = visibility::analyze(&problem.surface);
-    visibility.check_supported()?;
+    let visibility = visibility_of(problem, cfg)?;
     let disc = discretize(problem, cfg)?;
     let stages = Stages {
         problem,
@@ -321,8 +325,7 @@ pub(crate) fn solve_step(
 ) -> Result<(SolveOutcome, Plans), Error> {
     let t0 = Instant::now();
     check_quadrature(cfg)?;
-    let visibility = visibility::analyze(&problem.surface);
-    visibility.check_supported()?;
+    let visibility = visibility_of(problem, cfg)?;
     let disc = match degrees {
         None => Discretization::new(mesh, NodeSet::new(cfg.degree, cfg.alpha)?),
         Some((sets, degrees)) => Discretization::with_degrees(mesh, sets.to_vec(), degrees)?,
@@ -389,7 +392,7 @@ impl Stages<'_> {
             estimate_channels(
                 problem,
                 cfg,
-                &visibility,
+                (&visibility, built.plan.stats().visibility_bound),
                 &mut channels,
                 self.previous,
                 self.guess,

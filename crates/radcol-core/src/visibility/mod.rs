@@ -5,6 +5,7 @@
 //! [`analyze`] decides that from the geometry once, so convex enclosures (the
 //! built-in analytic surfaces, a box room, two facing plates) never pay for it.
 
+pub(crate) mod bounce;
 pub mod clip;
 mod hull;
 pub mod occluders;
@@ -32,9 +33,24 @@ pub struct VisibilityAnalysis {
     /// surface is refused ([`VisibilityAnalysis::check_supported`]).
     #[serde(skip)]
     pub curved: Option<(String, String)>,
+    /// Per patch: whether pairs with its elements as columns may have their
+    /// visibility approximated within a budget
+    /// ([`crate::assembly::QuadratureOptions::visibility_budget`]): the
+    /// patches that emit nothing ([`VisibilityAnalysis::with_bounce_patches`]).
+    /// Empty: none may (every pair exact).
+    #[serde(skip)]
+    pub bounce_patches: Vec<bool>,
 }
 
 impl VisibilityAnalysis {
+    /// The analysis with `patches` ([`VisibilityAnalysis::bounce_patches`]).
+    pub fn with_bounce_patches(self, patches: Vec<bool>) -> Self {
+        Self {
+            bounce_patches: patches,
+            ..self
+        }
+    }
+
     /// Refuses a surface whose occlusion radcol cannot model (a curved patch
     /// in a surface not known to bound a convex set), instead of returning a
     /// silently wrong answer.
@@ -74,6 +90,7 @@ pub fn analyze(surface: &Surface) -> VisibilityAnalysis {
             reason: "no visibility tests: the surface lies on the boundary of a convex set, facing inward"
                 .into(),
             curved: None,
+            bounce_patches: Vec::new(),
         };
     }
     if let Some(p) = surface.patches.iter().find(|p| !p.map.is_affine()) {
@@ -84,6 +101,7 @@ pub fn analyze(surface: &Surface) -> VisibilityAnalysis {
                 p.name
             ),
             curved: Some((surface.name.clone(), p.name.clone())),
+            bounce_patches: Vec::new(),
         };
     }
     let tris = base_triangles(surface);
@@ -94,6 +112,7 @@ pub fn analyze(surface: &Surface) -> VisibilityAnalysis {
                      (the scene lies on the boundary of a convex set, facing inward)"
                 .into(),
             curved: None,
+            bounce_patches: Vec::new(),
         },
         Some((t, v)) => VisibilityAnalysis {
             needed: true,
@@ -103,6 +122,7 @@ pub fn analyze(surface: &Surface) -> VisibilityAnalysis {
                 v.x, v.y, v.z
             ),
             curved: None,
+            bounce_patches: Vec::new(),
         },
     }
 }

@@ -2,6 +2,7 @@
 //! refinement tree of every base triangle, walked per row block so that a
 //! node's candidate occluders bound its descendants'.
 
+use super::bounce::{choose, mass_bound, Bounce, Deferred};
 use super::{clip, Occluders};
 use crate::geometry::barycentric_st;
 use crate::mesh::{Element, Mesh};
@@ -22,6 +23,12 @@ pub(crate) struct PartialRow {
     /// row element starts (ascending): their candidates facing away from
     /// a row point cannot block it ([`super::sealed`]).
     pub(crate) in_front: Vec<u32>,
+    /// The pairs whose visibility is approximated ([`super::bounce`]),
+    /// ascending: a subset of `elements`.
+    approx: Vec<u32>,
+    /// Their mass bounds, a row point's after another's per pair (f32
+    /// rounded up).
+    approx_mass: Vec<f32>,
 }
 
 impl PartialRow {
@@ -31,6 +38,45 @@ impl PartialRow {
             + self.ranges.capacity() * 8
             + self.candidates.capacity() * 4
             + self.in_front.capacity() * 4
+            + self.approx.capacity() * 4
+            + self.approx_mass.capacity() * 4
+    }
+
+    /// Whether the pair with element `k` is approximated.
+    pub(crate) fn is_approx(&self, k: usize) -> bool {
+        self.approx.binary_search(&(k as u32)).is_ok()
+    }
+
+    /// How many pairs are approximated.
+    pub(crate) fn approximated(&self) -> usize {
+        self.approx.len()
+    }
+
+    /// Per row point (`rows` of them), the summed mass bounds of the
+    /// approximated pairs.
+    pub(crate) fn bound_sums(&self, rows: usize) -> Vec<f64> {
+        let mut sums = vec![0.0; rows];
+        for masses in self.approx_mass.chunks_exact(rows.max(1)) {
+            sums.iter_mut()
+                .zip(masses)
+                .for_each(|(s, &m)| *s += m as f64);
+        }
+        sums
+    }
+
+    /// Marks the last pushed pair approximated, with its mass bounds.
+    pub(crate) fn push_approx(&mut self, k: usize, cands: &[u32], mass: &[f64]) {
+        self.push(k, cands);
+        self.approx.push(k as u32);
+        // Rounded up: f32 holds 6e-8 of relative error.
+        let up = |m: f64| (m * (1.0 + 1e-6)) as f32;
+        self.approx_mass.extend(mass.iter().map(|&m| up(m)));
+    }
+
+    /// The mass bounds of approximated pair `i` (its index in `approx`).
+    fn masses_of(&self, i: usize) -> &[f32] {
+        let rows = self.approx_mass.len() / self.approx.len().max(1);
+        &self.approx_mass[i * rows..(i + 1) * rows]
     }
 
     /// This row's pairs whose element `map` sends to a new index (the
@@ -44,6 +90,10 @@ impl PartialRow {
             if let Some(nk) = map(k as usize) {
                 let (start, len) = self.ranges[i];
                 out.push(nk, &self.candidates[start as usize..(start + len) as usize]);
+                if let Ok(a) = self.approx.binary_search(&k) {
+                    out.approx.push(nk as u32);
+                    out.approx_mass.extend_from_slice(self.masses_of(a));
+                }
             }
         }
         out
@@ -70,10 +120,15 @@ impl PartialRow {
                 (other, &mut j)
             };
             let (start, len) = row.ranges[*at];
+            let k = row.elements[*at];
             out.push(
-                row.elements[*at] as usize,
+                k as usize,
                 &row.candidates[start as usize..(start + len) as usize],
             );
+            if let Ok(a) = row.approx.binary_search(&k) {
+                out.approx.push(k);
+                out.approx_mass.extend_from_slice(row.masses_of(a));
+            }
             *at += 1;
         }
         out
@@ -121,6 +176,7 @@ pub(crate) fn partial_pairs(
     rows: &[(DVec3, DVec3)],
     flat_geom: &[Plane],
     live: &[bool],
+    bounce: Option<Bounce<'_>>,
 ) -> Seen {
     let walk = Walk {
         occ,
@@ -130,10 +186,25 @@ pub(crate) fn partial_pairs(
         live,
         flat_geom,
         front: RefCell::new(Vec::new()),
+        bounce,
+        deferred: RefCell::new(Vec::new()),
     };
     let mut seen = Seen::default();
     for &root in &tree.roots {
         walk.visit(root, None, &mut seen);
+    }
+    if let Some(b) = bounce {
+        let (chosen, rest) = choose(walk.deferred.take(), b.spent, b.budget);
+        let mut exact = Seen::default();
+        for d in &rest {
+            walk.mark_exact(d.k as usize, &d.cands, &mut exact);
+        }
+        let mut approx = PartialRow::default();
+        for d in &chosen {
+            approx.push_approx(d.k as usize, &d.cands, &d.mass);
+        }
+        seen.partial = seen.partial.merged(&exact.partial).merged(&approx);
+        seen.hidden.extend(exact.hidden);
     }
     let mut in_front: Vec<u32> = walk
         .front
@@ -269,6 +340,9 @@ struct Walk<'a> {
     /// Per closed component met so far: whether A's segments start in its
     /// front region ([`super::sealed::Sealed::starts_in_front`]).
     front: RefCell<Vec<(u32, bool)>>,
+    /// What may be approximated, and the pairs set aside for it.
+    bounce: Option<Bounce<'a>>,
+    deferred: RefCell<Vec<Deferred>>,
 }
 
 impl Walk<'_> {
@@ -321,6 +395,42 @@ impl Walk<'_> {
     }
 
     fn mark(&self, k: usize, cands: &[u32], seen: &mut Seen) {
+        if !self.defer(k, cands) {
+            self.mark_exact(k, cands, seen);
+        }
+    }
+
+    /// Sets the pair aside for [`choose`] when its visibility may be
+    /// approximated: occluders meet it, its element emits nothing and lies
+    /// in front of A's plane, and its mass bound is within the budget at
+    /// every row point. Its hidden test is then left to `choose`'s rest.
+    fn defer(&self, k: usize, cands: &[u32]) -> bool {
+        let Some(b) = self.bounce else {
+            return false;
+        };
+        if cands.is_empty()
+            || !b.columns[k]
+            || straddles(self.a, self.flat_geom[k].0, self.occ.scale())
+        {
+            return false;
+        }
+        let mass: Vec<f64> = self
+            .rows
+            .iter()
+            .map(|&(p, n)| mass_bound(p, n, self.flat_geom[k]))
+            .collect();
+        if !mass.iter().all(|&m| m <= b.budget) {
+            return false;
+        }
+        self.deferred.borrow_mut().push(Deferred {
+            k: k as u32,
+            cands: cands.to_vec(),
+            mass,
+        });
+        true
+    }
+
+    fn mark_exact(&self, k: usize, cands: &[u32], seen: &mut Seen) {
         if self.hidden(&self.flat_geom[k].0, cands) {
             seen.hidden.push(k as u32);
         } else if straddles(self.a, self.flat_geom[k].0, self.occ.scale()) || !cands.is_empty() {

@@ -66,6 +66,12 @@ pub struct QuadratureOptions {
     pub self_order: usize,
     /// Partly visible pairs: exact clipping or rays per quadrature point.
     pub visibility: VisibilityMode,
+    /// Per row point, at most this much unoccluded mass ((1/π) ∫ G over the
+    /// element, bounded) of partly visible pairs whose element emits nothing
+    /// may have its visibility approximated by a few rays instead of clipped
+    /// ([`crate::visibility::bounce`]; the bound it leaves is added to the
+    /// error estimate). 0: every pair exact (the default).
+    pub visibility_budget: f64,
 }
 
 impl Default for QuadratureOptions {
@@ -75,6 +81,7 @@ impl Default for QuadratureOptions {
             max_depth: 32,
             self_order: 20,
             visibility: VisibilityMode::Clip,
+            visibility_budget: 0.0,
         }
     }
 }

@@ -1,11 +1,18 @@
 //! Pair classes: for every (row block, element) pair, culled, far with a rule
 //! degree, partly visible, near, or on the element, judged from the block's
-//! points and the element's bounding ball.
+//! points and the element's bounding ball; `classify_all`, every row block's
+//! classes and partly visible pairs (bounded approximations chosen here).
 
+use super::{class_table, AssemblyPlan, ClassTable, Unchanged};
+use crate::assembly::integrate::QuadratureOptions;
 use crate::assembly::integrate::{far_degree, piece_ball};
 use crate::discretization::CollocationPoint;
+use crate::discretization::Discretization;
 use crate::mesh::Mesh;
-use crate::visibility::walk::Plane;
+use crate::progress::ProgressHandle;
+use crate::visibility::bounce::Bounce;
+use crate::visibility::walk::{partial_pairs, PartialRow, Plane, RefinementTree};
+use crate::visibility::{Occluders, VisibilityAnalysis};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -153,4 +160,130 @@ impl ElementShapes {
             None => PairClass::Near,
         }
     }
+}
+
+/// Per element, whether its pairs may be approximated: with a budget, the
+/// elements of the patches the analysis names.
+pub(super) fn bounce_columns(
+    disc: &Discretization,
+    opts: &QuadratureOptions,
+    visibility: &VisibilityAnalysis,
+) -> Option<Vec<bool>> {
+    let patches = &visibility.bounce_patches;
+    (opts.visibility_budget > 0.0 && !patches.is_empty()).then(|| {
+        let elements = disc.mesh().elements();
+        elements.iter().map(|e| patches[e.patch as usize]).collect()
+    })
+}
+
+pub(super) fn classify_all(
+    disc: &Discretization,
+    rows: &Discretization,
+    (tol, bounce): (f64, Option<Bounce<'_>>),
+    occluders: Option<&Occluders>,
+    progress: &Option<ProgressHandle>,
+    prev: Option<(&AssemblyPlan, &Unchanged)>,
+    only: Option<&[bool]>,
+) -> (ClassTable, Vec<PartialRow>, Vec<f32>) {
+    let mesh = disc.mesh();
+    let n = mesh.len();
+    let shapes = ElementShapes::new(mesh);
+    let pts = rows.points();
+    let tree = match occluders {
+        Some(_) => RefinementTree::new(mesh),
+        None => RefinementTree::default(),
+    };
+    let rows: Vec<(class_table::Row, PartialRow, f32)> = (0..n)
+        .into_par_iter()
+        .map(|kp| {
+            let started = std::time::Instant::now();
+            // A cancelled solve classifies nothing more (all culled): the
+            // pipeline returns `Error::Cancelled` once the plan is built.
+            // Rows left out of a sampled plan: all culled, likewise.
+            if progress.as_ref().is_some_and(|p| p.cancelled()) || only.is_some_and(|o| !o[kp]) {
+                return (ClassTable::culled(n), PartialRow::default(), 0.0);
+            }
+            let block = &pts[rows.range(kp)];
+            // The previous plan's row of this element, when it is unchanged.
+            let old = prev.and_then(|(p, u)| u.old(kp).map(|op| (p, u, op)));
+            let reused = |k: usize| old.is_some_and(|(_, u, _)| u.old(k).is_some());
+            let mut row: Vec<u8> = match old {
+                Some((p, u, op)) => {
+                    let old_row = p.classes.row(op, 0..u.old_len());
+                    (0..n)
+                        .map(|k| match u.old(k) {
+                            Some(ok) => old_row[ok],
+                            None => shapes.classify(kp, block, k, tol, disc.degree(k)).code(),
+                        })
+                        .collect()
+                }
+                None => (0..n)
+                    .map(|k| shapes.classify(kp, block, k, tol, disc.degree(k)).code())
+                    .collect(),
+            };
+            let mut partial = PartialRow::default();
+            if let (Some(occ), true) = (occluders, shapes.is_flat(kp)) {
+                let live: Vec<bool> = (0..n)
+                    .map(|k| {
+                        let c = PairClass::from_code(row[k]);
+                        !reused(k)
+                            && c != PairClass::Culled
+                            && c != PairClass::OnElement
+                            && shapes.is_flat(k)
+                    })
+                    .collect();
+                let at: Vec<(DVec3, DVec3)> =
+                    block.iter().map(|p| (p.position, p.normal)).collect();
+                // The previous plan's pairs of this row that are kept, and
+                // the approximation budget they already spend.
+                let kept = old.map(|(p, u, op)| p.partial[op].remapped(|ok| u.new_index(ok)));
+                let spent = kept.as_ref().map(|r| r.bound_sums(block.len()));
+                let bounce = bounce.map(|b| Bounce {
+                    spent: spent.as_deref().unwrap_or(&[]),
+                    ..b
+                });
+                let seen = partial_pairs(
+                    occ,
+                    &tree,
+                    shapes.planes[kp],
+                    &at,
+                    &shapes.planes,
+                    &live,
+                    bounce,
+                );
+                // Pairs hidden from every row point are culled: their
+                // entries are zero, and as partial pairs they were clipped
+                // at every fill and made every block of a shadow look rough
+                // to the compressed operator.
+                for &k in &seen.hidden {
+                    row[k as usize] = PairClass::Culled.code();
+                }
+                partial = seen.partial;
+                for &k in &partial.elements {
+                    row[k as usize] = PairClass::Partial.code();
+                }
+                if let Some(kept) = kept {
+                    partial = partial.merged(&kept);
+                }
+            }
+            if let Some(p) = progress {
+                p.advance(1);
+            }
+            let row = ClassTable::encode(n, &row);
+            (row, partial, started.elapsed().as_secs_f32())
+        })
+        .collect();
+    let mut classes = Vec::with_capacity(n);
+    let mut partial = Vec::with_capacity(if occluders.is_some() { n } else { 0 });
+    let mut seconds = Vec::with_capacity(if only.is_some() { n } else { 0 });
+    for (row, p, t) in rows {
+        classes.push(row);
+        if occluders.is_some() {
+            partial.push(p);
+        }
+        if only.is_some() {
+            seconds.push(t);
+        }
+    }
+    (ClassTable::from_encoded(n, classes), partial, seconds)
 }

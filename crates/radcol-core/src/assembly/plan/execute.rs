@@ -4,9 +4,9 @@
 use super::kernels::{contract, far_kernel_flat, far_kernel_row, RUN_CHUNK};
 use super::{AssemblyPlan, FillMode, PairClass};
 use crate::assembly::integrate::{ElementIntegrator, FieldPoint, Integrand, LagrangeBasis};
-use crate::assembly::VisibilityMode;
+use crate::assembly::{QuadratureOptions, VisibilityMode};
 use crate::discretization::CollocationPoint;
-use crate::visibility::{clip, sealed};
+use crate::visibility::{bounce, clip, sealed};
 use glam::DVec3;
 
 /// What every run of one row block shares.
@@ -46,8 +46,6 @@ impl AssemblyPlan {
             .as_ref()
             .expect("partial pairs exist only with occluders");
         let row = &self.partial[kp];
-        let cands = sealed::facing_point(occ, &row.in_front, row.candidates_of(k), position);
-        let cands = &cands[..];
         let verts = self.disc.mesh().vertices(k);
         let r = self.disc.degree(k);
         let fp = FieldPoint {
@@ -56,6 +54,32 @@ impl AssemblyPlan {
             on_element: None,
         };
         out.fill(0.0);
+        if row.is_approx(k) {
+            // Bounded approximation: the unoccluded integral times the
+            // fraction of a few rays that reach the element (a ray a closed
+            // mesh blocks crosses one of its triangles facing P first, so
+            // every candidate may be asked).
+            let cands = row.candidates_of(k);
+            let seen = bounce::visible_fraction(position, &verts, occ, cands);
+            if seen == 0.0 {
+                return 0;
+            }
+            let whole = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+            let loose = ElementIntegrator::with_self_rule(
+                self.disc.mesh(),
+                &self.ladder,
+                QuadratureOptions {
+                    tol: bounce::APPROX_TOL.max(self.opts.tol),
+                    ..self.opts.clone()
+                },
+                self.self_rule.clone(),
+            );
+            let evals = loose.integrate_region(&fp, k, whole, r, phi, out);
+            out.iter_mut().for_each(|x| *x *= seen);
+            return evals;
+        }
+        let cands = sealed::facing_point(occ, &row.in_front, row.candidates_of(k), position);
+        let cands = &cands[..];
         if self.opts.visibility == VisibilityMode::Rays {
             let seen = |k: usize, st: [f64; 2], q: DVec3, out: &mut [f64]| {
                 if cands.iter().any(|&i| clip::blocks(position, q, occ.get(i))) {

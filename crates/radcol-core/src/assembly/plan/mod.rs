@@ -34,11 +34,10 @@ use super::integrate::{ElementIntegrator, QuadratureOptions, SelfRules, Shortfal
 use crate::discretization::Discretization;
 use crate::progress::ProgressHandle;
 use crate::quadrature::{RuleLadder, MAX_RULE_DEGREE};
-use crate::visibility::walk::{partial_pairs, PartialRow, RefinementTree};
+use crate::visibility::bounce::Bounce;
+use crate::visibility::walk::PartialRow;
 use crate::visibility::{self, Occluders, VisibilityAnalysis};
-use classify::ElementShapes;
-use glam::DVec3;
-use rayon::prelude::*;
+use classify::{bounce_columns, classify_all};
 use serde::Serialize;
 use std::sync::Arc;
 
@@ -55,6 +54,12 @@ pub struct PlanStats {
     pub pairs_culled: u64,
     /// Pairs integrated over their clipped visible part (scenes that occlude).
     pub pairs_partial: u64,
+    /// Of those, the pairs whose visibility is approximated within the
+    /// budget ([`QuadratureOptions::visibility_budget`]).
+    pub pairs_approximate: u64,
+    /// The largest sum of the approximated pairs' mass bounds at a row
+    /// point: the residual moves by at most ρ times this times max |u|.
+    pub visibility_bound: f64,
     /// Kernel evaluations of the far pairs: Σ rule points.
     pub far_kernel_evals: u64,
     /// Integrals of the assembly so far that stopped at a depth limit short
@@ -206,17 +211,26 @@ impl AssemblyPlan {
         let occluders = visibility
             .needed
             .then(|| Occluders::new(&visibility::base_triangles(disc.mesh().surface())));
+        let columns = bounce_columns(&disc, &opts, visibility);
+        let bounce = columns.as_deref().map(|columns| Bounce {
+            budget: opts.visibility_budget,
+            columns,
+            spent: &[],
+        });
         let (classes, partial, row_seconds) = classify_all(
             &disc,
             rows.as_deref().unwrap_or(&disc),
-            opts.tol,
+            (opts.tol, bounce),
             occluders.as_ref(),
             &progress,
             prev.as_ref().map(|(p, u)| (*p, &**u)),
             only,
         );
         let ladder = RuleLadder::new();
-        let (stats, used) = count(&classes, rows.as_deref().unwrap_or(&disc), &ladder);
+        let (mut stats, used) = count(&classes, rows.as_deref().unwrap_or(&disc), &ladder);
+        let row_disc = rows.as_deref().unwrap_or(&disc);
+        (stats.pairs_approximate, stats.visibility_bound) =
+            crate::visibility::bounce::totals(&partial, |kp| row_disc.nodes_per(kp));
         let flat = tables::flat_elements(disc.mesh());
         let tables = (0..=MAX_RULE_DEGREE)
             .map(|d| used[d].then(|| tables::build_table(&disc, &ladder, d, flat.as_ref())))
@@ -349,102 +363,6 @@ impl AssemblyPlan {
 /// The class codes of every row block, and (with occluders) each block's
 /// partly visible pairs with their candidate occluders; with `prev`, the
 /// pairs of two unchanged elements are taken from the previous plan.
-fn classify_all(
-    disc: &Discretization,
-    rows: &Discretization,
-    tol: f64,
-    occluders: Option<&Occluders>,
-    progress: &Option<ProgressHandle>,
-    prev: Option<(&AssemblyPlan, &Unchanged)>,
-    only: Option<&[bool]>,
-) -> (ClassTable, Vec<PartialRow>, Vec<f32>) {
-    let mesh = disc.mesh();
-    let n = mesh.len();
-    let shapes = ElementShapes::new(mesh);
-    let pts = rows.points();
-    let tree = match occluders {
-        Some(_) => RefinementTree::new(mesh),
-        None => RefinementTree::default(),
-    };
-    let rows: Vec<(class_table::Row, PartialRow, f32)> = (0..n)
-        .into_par_iter()
-        .map(|kp| {
-            let started = std::time::Instant::now();
-            // A cancelled solve classifies nothing more (all culled): the
-            // pipeline returns `Error::Cancelled` once the plan is built.
-            // Rows left out of a sampled plan: all culled, likewise.
-            if progress.as_ref().is_some_and(|p| p.cancelled()) || only.is_some_and(|o| !o[kp]) {
-                return (ClassTable::culled(n), PartialRow::default(), 0.0);
-            }
-            let block = &pts[rows.range(kp)];
-            // The previous plan's row of this element, when it is unchanged.
-            let old = prev.and_then(|(p, u)| u.old(kp).map(|op| (p, u, op)));
-            let reused = |k: usize| old.is_some_and(|(_, u, _)| u.old(k).is_some());
-            let mut row: Vec<u8> = match old {
-                Some((p, u, op)) => {
-                    let old_row = p.classes.row(op, 0..u.old_len());
-                    (0..n)
-                        .map(|k| match u.old(k) {
-                            Some(ok) => old_row[ok],
-                            None => shapes.classify(kp, block, k, tol, disc.degree(k)).code(),
-                        })
-                        .collect()
-                }
-                None => (0..n)
-                    .map(|k| shapes.classify(kp, block, k, tol, disc.degree(k)).code())
-                    .collect(),
-            };
-            let mut partial = PartialRow::default();
-            if let (Some(occ), true) = (occluders, shapes.is_flat(kp)) {
-                let live: Vec<bool> = (0..n)
-                    .map(|k| {
-                        let c = PairClass::from_code(row[k]);
-                        !reused(k)
-                            && c != PairClass::Culled
-                            && c != PairClass::OnElement
-                            && shapes.is_flat(k)
-                    })
-                    .collect();
-                let at: Vec<(DVec3, DVec3)> =
-                    block.iter().map(|p| (p.position, p.normal)).collect();
-                let seen = partial_pairs(occ, &tree, shapes.planes[kp], &at, &shapes.planes, &live);
-                // Pairs hidden from every row point are culled: their
-                // entries are zero, and as partial pairs they were clipped
-                // at every fill and made every block of a shadow look rough
-                // to the compressed operator.
-                for &k in &seen.hidden {
-                    row[k as usize] = PairClass::Culled.code();
-                }
-                partial = seen.partial;
-                for &k in &partial.elements {
-                    row[k as usize] = PairClass::Partial.code();
-                }
-                if let Some((p, u, op)) = old {
-                    partial = partial.merged(&p.partial[op].remapped(|ok| u.new_index(ok)));
-                }
-            }
-            if let Some(p) = progress {
-                p.advance(1);
-            }
-            let row = ClassTable::encode(n, &row);
-            (row, partial, started.elapsed().as_secs_f32())
-        })
-        .collect();
-    let mut classes = Vec::with_capacity(n);
-    let mut partial = Vec::with_capacity(if occluders.is_some() { n } else { 0 });
-    let mut seconds = Vec::with_capacity(if only.is_some() { n } else { 0 });
-    for (row, p, t) in rows {
-        classes.push(row);
-        if occluders.is_some() {
-            partial.push(p);
-        }
-        if only.is_some() {
-            seconds.push(t);
-        }
-    }
-    (ClassTable::from_encoded(n, classes), partial, seconds)
-}
-
 /// Whether the elements `unchanged` keeps have the same node set (degree
 /// and α) in `new` as in `old`: only then are their pairs' classes and
 /// entries the same.

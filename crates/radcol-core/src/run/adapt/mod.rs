@@ -32,7 +32,7 @@ pub use options::{
 };
 
 use super::pipeline::{solve_step, PerElement, Plans, Previous};
-use super::{discretize, OperatorKind, SolveConfig, SolveOutcome, Timings};
+use super::{discretize, visibility_budget_for, OperatorKind, SolveConfig, SolveOutcome, Timings};
 use crate::assembly::{AssemblyBackend, Unchanged};
 use crate::error::{Error, InputError};
 use crate::mesh::Mesh;
@@ -151,10 +151,13 @@ pub fn solve_adaptive(
         return Err(InputError::NoEmission.into());
     }
     hp::check_backend(opts.hp, backend)?;
-    let cfg = SolveConfig {
+    let mut cfg = SolveConfig {
         estimate: true,
         ..cfg.clone()
     };
+    // Approximate visibility may take at most a quarter of the target.
+    let budget = cfg.quad.visibility_budget;
+    cfg.quad.visibility_budget = visibility_budget_for(budget, opts.target, problem.rho_bound());
     let mut mesh = discretize(problem, &cfg)?.mesh().clone();
     // With hp, every element's degree and how it came to be.
     let mut degrees = opts
@@ -368,7 +371,9 @@ fn describe(
         singular_elements: (0..indicator.len())
             .filter(|&k| frozen(k) && indicator[k] > threshold)
             .count(),
-        estimate_elsewhere: splittable_max(indicator, frozen),
+        // Approximate visibility's bound holds at every point, the
+        // splittable elements' included.
+        estimate_elsewhere: splittable_max(indicator, frozen) + visibility_bound(out),
         seconds: 0.0,
         estimate_updated_within: out
             .channels
@@ -408,6 +413,15 @@ fn worst(out: &SolveOutcome) -> (f64, f64, f64) {
         .fold((0.0f64, 0.0f64, 0.0f64), |(m, r, s), e| {
             (m.max(e.max_rel), r.max(e.rms_rel), s.max(e.shown_max_rel()))
         })
+}
+
+/// The worst channel's bound of approximate visibility relative to its
+/// max |u_n| (0 when every pair is exact).
+fn visibility_bound(out: &SolveOutcome) -> f64 {
+    let channels = out.channels.iter().filter_map(|c| c.estimate.as_ref());
+    channels.fold(0.0, |m, e| {
+        m.max(e.visibility_bound / e.scale.max(f64::MIN_POSITIVE))
+    })
 }
 
 /// The largest `indicator` of an element that is not `frozen` (0 if none).
