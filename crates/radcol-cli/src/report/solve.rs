@@ -143,12 +143,31 @@ pub struct SolveReport {
     contents: Option<SceneSummary>,
 }
 
+impl AssemblyWork {
+    /// The assembly's work in `out`, which took `seconds`.
+    fn new(out: &SolveOutcome, seconds: f64) -> Self {
+        let p = &out.plan;
+        AssemblyWork {
+            kernel_evals: out.kernel_evals,
+            kernel_evals_per_s: (seconds > 0.0).then(|| out.kernel_evals as f64 / seconds),
+            pairs_far: p.pairs_far,
+            pairs_near: p.pairs_near,
+            pairs_self: p.pairs_self,
+            pairs_culled: p.pairs_culled,
+            pairs_partial: p.pairs_partial,
+            pairs_approximate: p.pairs_approximate,
+            visibility_bound: p.visibility_bound,
+            far_kernel_evals: p.far_kernel_evals,
+            device_s: out.device_seconds,
+        }
+    }
+}
+
 impl SolveReport {
     /// The report of `out`, solved for `s`, with the files `written`.
     pub fn new(s: &Setup, out: &SolveOutcome, written: &[Written]) -> Self {
         let disc = &out.discretization;
         let (sr_lo, sr_hi) = disc.mesh().shape_ratio_range();
-        let p = &out.plan;
         let t = &out.timings;
         let scene = s.loaded.scene();
         let grading = s
@@ -185,20 +204,7 @@ impl SolveReport {
             backend: out.backend.clone(),
             solver: out.channels.first().map(|c| c.solver.clone()),
             timings: *t,
-            assembly: AssemblyWork {
-                kernel_evals: out.kernel_evals,
-                kernel_evals_per_s: (t.assembly_s > 0.0)
-                    .then(|| out.kernel_evals as f64 / t.assembly_s),
-                pairs_far: p.pairs_far,
-                pairs_near: p.pairs_near,
-                pairs_self: p.pairs_self,
-                pairs_culled: p.pairs_culled,
-                pairs_partial: p.pairs_partial,
-                pairs_approximate: p.pairs_approximate,
-                visibility_bound: p.visibility_bound,
-                far_kernel_evals: p.far_kernel_evals,
-                device_s: out.device_seconds,
-            },
+            assembly: AssemblyWork::new(out, t.assembly_s),
             visibility: out.visibility.clone(),
             materials: scene.map(|sc| {
                 sc.materials

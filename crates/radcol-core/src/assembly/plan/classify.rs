@@ -223,48 +223,15 @@ pub(super) fn classify_all(
             };
             let mut partial = PartialRow::default();
             if let (Some(occ), true) = (occluders, shapes.is_flat(kp)) {
-                let live: Vec<bool> = (0..n)
-                    .map(|k| {
-                        let c = PairClass::from_code(row[k]);
-                        !reused(k)
-                            && c != PairClass::Culled
-                            && c != PairClass::OnElement
-                            && shapes.is_flat(k)
-                    })
-                    .collect();
-                let at: Vec<(DVec3, DVec3)> =
-                    block.iter().map(|p| (p.position, p.normal)).collect();
-                // The previous plan's pairs of this row that are kept, and
-                // the approximation budget they already spend.
+                // The previous plan's pairs of this row that are kept.
                 let kept = old.map(|(p, u, op)| p.partial[op].remapped(|ok| u.new_index(ok)));
-                let spent = kept.as_ref().map(|r| r.bound_sums(block.len()));
-                let bounce = bounce.map(|b| Bounce {
-                    spent: spent.as_deref().unwrap_or(&[]),
-                    ..b
-                });
-                let seen = partial_pairs(
+                let walk = Occluded {
                     occ,
-                    &tree,
-                    shapes.planes[kp],
-                    &at,
-                    &shapes.planes,
-                    &live,
+                    tree: &tree,
+                    shapes: &shapes,
                     bounce,
-                );
-                // Pairs hidden from every row point are culled: their
-                // entries are zero, and as partial pairs they were clipped
-                // at every fill and made every block of a shadow look rough
-                // to the compressed operator.
-                for &k in &seen.hidden {
-                    row[k as usize] = PairClass::Culled.code();
-                }
-                partial = seen.partial;
-                for &k in &partial.elements {
-                    row[k as usize] = PairClass::Partial.code();
-                }
-                if let Some(kept) = kept {
-                    partial = partial.merged(&kept);
-                }
+                };
+                partial = walk.row(kp, block, &mut row, &reused, kept);
             }
             if let Some(p) = progress {
                 p.advance(1);
@@ -286,4 +253,61 @@ pub(super) fn classify_all(
         }
     }
     (ClassTable::from_encoded(n, classes), partial, seconds)
+}
+
+/// What the occlusion walk of every row block shares.
+struct Occluded<'a> {
+    occ: &'a Occluders,
+    tree: &'a RefinementTree,
+    shapes: &'a ElementShapes,
+    bounce: Option<Bounce<'a>>,
+}
+
+impl Occluded<'_> {
+    /// The partly visible pairs of row block `kp` (points `block`), with
+    /// `row`'s classes updated (hidden pairs culled, partial ones marked)
+    /// and the previous plan's `kept` pairs merged in; pairs `reused` from
+    /// it are not walked.
+    fn row(
+        &self,
+        kp: usize,
+        block: &[CollocationPoint],
+        row: &mut [u8],
+        reused: &dyn Fn(usize) -> bool,
+        kept: Option<PartialRow>,
+    ) -> PartialRow {
+        let shapes = self.shapes;
+        let live: Vec<bool> = (0..row.len())
+            .map(|k| {
+                let c = PairClass::from_code(row[k]);
+                !reused(k)
+                    && c != PairClass::Culled
+                    && c != PairClass::OnElement
+                    && shapes.is_flat(k)
+            })
+            .collect();
+        let at: Vec<(DVec3, DVec3)> = block.iter().map(|p| (p.position, p.normal)).collect();
+        // The approximation budget the kept pairs already spend.
+        let spent = kept.as_ref().map(|r| r.bound_sums(block.len()));
+        let bounce = self.bounce.map(|b| Bounce {
+            spent: spent.as_deref().unwrap_or(&[]),
+            ..b
+        });
+        let (planes, tree) = (&shapes.planes, self.tree);
+        let seen = partial_pairs(self.occ, tree, planes[kp], &at, planes, &live, bounce);
+        // Pairs hidden from every row point are culled: their entries are
+        // zero, and as partial pairs they were clipped at every fill and
+        // made every block of a shadow look rough to the compressed
+        // operator.
+        for &k in &seen.hidden {
+            row[k as usize] = PairClass::Culled.code();
+        }
+        for &k in &seen.partial.elements {
+            row[k as usize] = PairClass::Partial.code();
+        }
+        match kept {
+            Some(kept) => seen.partial.merged(&kept),
+            None => seen.partial,
+        }
+    }
 }

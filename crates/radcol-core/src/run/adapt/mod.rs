@@ -151,13 +151,7 @@ pub fn solve_adaptive(
         return Err(InputError::NoEmission.into());
     }
     hp::check_backend(opts.hp, backend)?;
-    let mut cfg = SolveConfig {
-        estimate: true,
-        ..cfg.clone()
-    };
-    // Approximate visibility may take at most a quarter of the target.
-    let budget = cfg.quad.visibility_budget;
-    cfg.quad.visibility_budget = visibility_budget_for(budget, opts.target, problem.rho_bound());
+    let cfg = step_config(problem, cfg, opts);
     let mut mesh = discretize(problem, &cfg)?.mesh().clone();
     // With hp, every element's degree and how it came to be.
     let mut degrees = opts
@@ -413,6 +407,18 @@ fn worst(out: &SolveOutcome) -> (f64, f64, f64) {
         .fold((0.0f64, 0.0f64, 0.0f64), |(m, r, s), e| {
             (m.max(e.max_rel), r.max(e.rms_rel), s.max(e.shown_max_rel()))
         })
+}
+
+/// What every step solves with: `cfg` with the estimate on, and a
+/// visibility budget whose bound is at most a quarter of the target.
+fn step_config(problem: &Problem, cfg: &SolveConfig, opts: &AdaptOptions) -> SolveConfig {
+    let mut cfg = SolveConfig {
+        estimate: true,
+        ..cfg.clone()
+    };
+    let budget = cfg.quad.visibility_budget;
+    cfg.quad.visibility_budget = visibility_budget_for(budget, opts.target, problem.rho_bound());
+    cfg
 }
 
 /// The worst channel's bound of approximate visibility relative to its
