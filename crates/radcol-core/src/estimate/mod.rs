@@ -70,7 +70,7 @@ const CHECK_SEPARATION: f64 = 0.005;
 /// parameter `alpha`: degree r + 1 (capped at [`MAX_DEGREE`]), so that the
 /// interpolant of η through them holds the leading, degree-(r+1) term of
 /// u - u_n, and an α that keeps their interpolation well conditioned and
-/// the points away from the nodes ([`CHECK_ALPHA`]; only the centroid may
+/// the points away from the nodes (`CHECK_ALPHA`; only the centroid may
 /// be a node of both).
 pub fn check_nodes(r: usize, alpha: f64) -> NodeSet {
     let rc = (r + 1).min(MAX_DEGREE);
@@ -153,7 +153,7 @@ pub struct ErrorEstimate {
     /// (absolute) the approximation can have moved the solution,
     /// ρ_max B max|u_n| / (1 − ρ_max) with B the largest sum of the
     /// approximated pairs' mass bounds at a node or check point
-    /// ([`crate::visibility::bounce`]); already added to `max` and
+    /// (`visibility::bounce`); already added to `max` and
     /// `max_rel`, not to the element figures (they rank the elements for
     /// refinement, which does not lower it; a point's estimate is its
     /// element's plus this). 0 when every pair is exact.

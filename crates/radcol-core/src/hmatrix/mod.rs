@@ -280,7 +280,7 @@ impl HMatrix {
         self.matvec_many(&[x], &mut [y]);
     }
 
-    /// ys[c] = A xs[c] for every c, in one pass over the leaves: each leaf
+    /// `ys[c] = A xs[c]` for every c, in one pass over the leaves: each leaf
     /// is read from memory once and applied to every vector.
     pub fn matvec_many(&self, xs: &[&[f64]], ys: &mut [&mut [f64]]) {
         let (m, n) = self.stats.shape;

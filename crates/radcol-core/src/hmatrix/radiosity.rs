@@ -161,9 +161,9 @@ impl Structure for PlanEntries<'_> {
         self.all_pairs(rows, cols, |c| c == PairClass::Culled)
     }
 
-    /// Smooth when its planes allow ([`planes_clear`]), no element pair is
+    /// Smooth when its planes allow (`planes_clear`), no element pair is
     /// partly visible, and its culled pairs (facing away, coplanar or
-    /// hidden) fill whole rows and columns of elements ([`Self::cross`]),
+    /// hidden) fill whole rows and columns of elements (`cross`),
     /// which compression leaves out ([`Structure::zero_lines`]). Culled
     /// pairs elsewhere are a shadow boundary along element edges, where G
     /// jumps to 0, which ACA's samples miss at any tolerance (on the
@@ -179,7 +179,7 @@ impl Structure for PlanEntries<'_> {
 
     /// The rows of the row elements, and the columns of the column
     /// elements, whose pairs with every element of the other side are
-    /// culled ([`Self::culled`]).
+    /// culled (`culled`).
     fn zero_lines(&self, rows: &[usize], cols: &[usize]) -> (Vec<bool>, Vec<bool>) {
         let (disc, row_disc) = (self.plan.discretization(), self.plan.rows());
         let c = self.culled(rows, cols);

@@ -70,8 +70,8 @@ pub(super) fn with_elements<T>(
     build(reuse.as_ref())
 }
 
-/// The items of a refined mesh whose element k holds items `new[k]..new[k
-/// + 1]` (the old mesh's, `old`): for each, the old item it is or replaces
+/// The items of a refined mesh whose element k holds items
+/// `new[k]..new[k + 1]` (the old mesh's, `old`): for each, the old item it is or replaces
 /// (the same item of the element it was split from, or that element's last
 /// when it has fewer) and whether it is that item unchanged. None when
 /// `unchanged` does not know the new elements' parents.

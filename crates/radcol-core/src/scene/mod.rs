@@ -294,7 +294,7 @@ pub struct TriangleOrigin {
 
 impl Scene {
     /// The input triangle of every element of `mesh` (a mesh of this
-    /// scene's surface), through [`Mesh::base_triangles`]; None for an
+    /// scene's surface), through [`crate::mesh::Mesh::base_triangles`]; None for an
     /// element outside every surface triangle (a mesh of another surface).
     pub fn element_origins(&self, mesh: &crate::mesh::Mesh) -> Vec<Option<&TriangleOrigin>> {
         mesh.base_triangles()

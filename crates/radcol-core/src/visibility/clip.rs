@@ -91,8 +91,8 @@ pub fn blocks(p: DVec3, q: DVec3, t: &super::occluders::Occluder) -> bool {
 }
 
 /// Above this many candidate occluders, their shadows are merged into one
-/// region before it is taken from the element ([`merged`]); up to it they
-/// are subtracted one by one ([`subtracted`]), which is exact to rounding
+/// region before it is taken from the element (`merged`); up to it they
+/// are subtracted one by one (`subtracted`), which is exact to rounding
 /// and cheapest for a few occluders but fragments the visible part with
 /// every occluder that overlaps it: behind a closed mesh of m triangles the
 /// pieces, and the work, grow like a power of m above 2 (measured on a room

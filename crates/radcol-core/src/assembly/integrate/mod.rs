@@ -69,7 +69,7 @@ pub struct QuadratureOptions {
     /// Per row point, at most this much unoccluded mass ((1/π) ∫ G over the
     /// element, bounded) of partly visible pairs whose element emits nothing
     /// may have its visibility approximated by a few rays instead of clipped
-    /// ([`crate::visibility::bounce`]; the bound it leaves is added to the
+    /// (`visibility::bounce`; the bound it leaves is added to the
     /// error estimate). 0: every pair exact (the default).
     pub visibility_budget: f64,
 }

@@ -17,7 +17,7 @@ use std::ops::Range;
 const BYTES_PER_ROOT: f64 = 44.0;
 
 /// The bytes a table of `elements` elements is expected to take before it
-/// is built: 44 n^1.5 ([`BYTES_PER_ROOT`]), at most n² (every row as
+/// is built: 44 n^1.5 (`BYTES_PER_ROOT`), at most n² (every row as
 /// bytes). An estimate for scenes whose elements are numbered coherently
 /// in space (refinement keeps children together); the plan's measured
 /// size ([`ClassTable::heap_bytes`]) is checked once it is built.

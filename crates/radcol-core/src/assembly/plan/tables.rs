@@ -5,7 +5,7 @@
 //!
 //! On a surface of flat elements the table keeps each element's affine map
 //! (13 numbers, shared by every degree) and the rule, and the kernel is
-//! evaluated from them ([`FarTable::flat`], `kernels::far_kernel_flat`):
+//! evaluated from them (`FarTable::flat`, `kernels::far_kernel_flat`):
 //! tabulated, every degree's points took about 120 KB an element (2.4 GB
 //! of the room's 20 480 elements), more than the compressed operator at
 //! that size. Curved elements keep their points tabulated
@@ -186,7 +186,7 @@ impl FarTable {
     }
 
     /// The tabulated points of the elements `run` (None on a flat
-    /// surface, whose points are made from [`FarTable::flat`]).
+    /// surface, whose points are made from `FarTable::flat`).
     pub fn span(&self, run: Range<usize>) -> Option<FarSpan<'_>> {
         match &self.points {
             Points::Stored(s) => Some(s.span(run.start * self.nq..run.end * self.nq)),
