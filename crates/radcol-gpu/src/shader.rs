@@ -1,4 +1,4 @@
-//! WGSL sources (from `shaders/` at the workspace root) and the one-line
+//! WGSL sources (from the crate's `shaders/`) and the one-line
 //! preamble that picks the precision.
 
 use radcol_core::assembly::Scalar;
@@ -18,7 +18,7 @@ pub struct ShaderFile {
 pub const FAR_FIELD: ShaderFile = ShaderFile {
     name: "far_field.wgsl",
     entry_point: "far_field",
-    source: include_str!("../../../shaders/far_field.wgsl"),
+    source: include_str!("../shaders/far_field.wgsl"),
 };
 
 /// Every shader the crate compiles (the tests check this lists all of `shaders/`).

@@ -13,7 +13,7 @@ use std::path::PathBuf;
 const PRECISIONS: [Scalar; 2] = [Scalar::F64, Scalar::F32];
 
 fn shaders_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shaders")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("shaders")
 }
 
 /// Parses and validates `file` for `precision`; f32 must validate without the
