@@ -9,6 +9,7 @@
 
 mod bounce;
 mod box_constant;
+mod circles;
 mod contact;
 mod cost;
 mod discontinuity;

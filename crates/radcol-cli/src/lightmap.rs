@@ -3,7 +3,8 @@
 //! (linear radiance) or PNG (tone-mapped), and the lightmapped glTF.
 
 use crate::export;
-use crate::output::{create, layout};
+use crate::files::create;
+use crate::objects::layout;
 use crate::progress::Bar;
 use crate::setup::Look;
 use crate::validate::{Output, OutputKind};

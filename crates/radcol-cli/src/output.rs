@@ -1,9 +1,10 @@
 //! Files the CLI writes: the nodal CSV, images and vertex meshes, and the
 //! overwrite rule shared by every file.
 
-use crate::error::bad_input;
 use crate::export;
+use crate::files::create;
 use crate::lightmap;
+use crate::objects::layout;
 use crate::progress::Bar;
 use crate::report::Written;
 use crate::setup::Look;
@@ -13,7 +14,7 @@ use radcol_core::mesh::Mesh;
 use radcol_core::render::{self, Image, VertexMesh};
 use radcol_core::run::SolveOutcome;
 use radcol_core::solution::Solution;
-use std::fs::{File, OpenOptions};
+use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::time::Instant;
 
@@ -129,39 +130,6 @@ fn vertex_mesh(mesh: &Mesh, solutions: &[&Solution], look: &Look) -> Result<Vert
     })
 }
 
-/// The glTF nodes: with a scene, one per object (the patch name's group, the
-/// part before '/'), in the order they first appear; else one.
-pub(crate) fn layout(mesh: &Mesh, look: &Look) -> export::gltf::Layout {
-    let mut layout = export::gltf::Layout::single(&look.scene, mesh.len());
-    layout.metres_per_unit = look.metres_per_unit;
-    let patches = &mesh.surface().patches;
-    if !look.objects {
-        layout.object_of_patch = vec![0; patches.len()];
-        return layout;
-    }
-    layout.objects.clear();
-    let object_of_patch: Vec<u32> = patches
-        .iter()
-        .map(|p| {
-            let group = p.name.split('/').next().unwrap_or(&p.name).to_string();
-            match layout.objects.iter().position(|o| *o == group) {
-                Some(i) => i as u32,
-                None => {
-                    layout.objects.push(group);
-                    (layout.objects.len() - 1) as u32
-                }
-            }
-        })
-        .collect();
-    layout.object_of_element = mesh
-        .elements()
-        .iter()
-        .map(|e| object_of_patch[e.patch as usize])
-        .collect();
-    layout.object_of_patch = object_of_patch;
-    layout
-}
-
 /// The `--error-map` PNG: every element's estimate relative to max |u_n|
 /// (worst channel), seen by the image camera.
 fn write_error_map(o: &Output, look: &Look, out: &SolveOutcome, t: Instant) -> Result<Written> {
@@ -189,29 +157,6 @@ fn write_error_map(o: &Output, look: &Look, out: &SolveOutcome, t: Instant) -> R
         ),
         seconds: t.elapsed().as_secs_f64(),
     })
-}
-
-/// Opens `file` for writing: a fresh file, or (with `--force`) a truncated one.
-/// `create_new` closes the gap between the check in `setup::check_writable` and this write.
-pub fn create(file: &OutputFile) -> Result<BufWriter<File>> {
-    let mut opts = OpenOptions::new();
-    opts.write(true);
-    if file.force {
-        opts.create(true).truncate(true);
-    } else {
-        opts.create_new(true);
-    }
-    let shown = file.path.display();
-    let f = opts.open(&file.path).map_err(|e| {
-        if e.kind() == std::io::ErrorKind::AlreadyExists {
-            anyhow::Error::new(bad_input(format!(
-                "{shown} already exists; pass --force to overwrite it"
-            )))
-        } else {
-            anyhow::Error::new(e).context(format!("cannot create {shown}"))
-        }
-    })?;
-    Ok(BufWriter::new(f))
 }
 
 /// Column names of the channels: `u` for one channel, `u_<name>` otherwise.

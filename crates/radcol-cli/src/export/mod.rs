@@ -3,7 +3,7 @@
 //!
 //! Every writer takes plain data ([`radcol_core::render::Image`], tone-mapped
 //! pixels, [`radcol_core::render::VertexMesh`]) and any `Write`, so the caller
-//! opens files through `output::create` (which honours --force).
+//! opens files through `files::create` (which honours --force).
 
 pub mod error_map;
 pub mod exr;

@@ -279,7 +279,7 @@ fn run_comparison(job: StudyJob, w: &mut dyn Write) -> Result<()> {
 
 /// Writes a `--plot` SVG; returns its path as shown.
 fn write_svg(file: &crate::validate::OutputFile, svg: &str) -> Result<String> {
-    let mut f = output::create(file)?;
+    let mut f = crate::files::create(file)?;
     f.write_all(svg.as_bytes())
         .and_then(|_| f.flush())
         .with_context(|| format!("writing {}", file.path.display()))?;

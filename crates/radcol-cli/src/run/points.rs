@@ -4,7 +4,7 @@
 //! nothing.
 
 use crate::error::bad_input;
-use crate::output::create;
+use crate::files::create;
 use crate::report::{PointChannel, PointLine, PointsReport};
 use crate::setup::Setup;
 use crate::validate::PointsSpec;

@@ -23,6 +23,7 @@ mod pipeline;
 mod relight;
 mod size;
 
+pub use crate::solve::true_residual;
 pub use config::{SolveConfig, SolverKind, DEFAULT_COMPRESSION_TOL};
 pub use cost::{
     check_plan_memory, predict_plan, AssemblyCost, Extrapolated, MatrixCost, COST_SAMPLE_ROWS,
@@ -35,7 +36,7 @@ pub use defaults::{
 pub use inputs::{check_size, discretize, MAX_EXTENT, MIN_EXTENT};
 pub use operator::{GeometricOperator, OperatorChoice, OperatorDecision, OperatorKind};
 pub use outcome::{ChannelResult, SolveOutcome, SolverReport, Timings};
-pub use pipeline::{solve, solve_on_mesh, true_residual};
+pub use pipeline::{solve, solve_on_mesh};
 pub use relight::Relighter;
 pub use size::{
     available_memory, dense_bytes, elements, mesh_size, process_memory, usable, MemoryBudget,

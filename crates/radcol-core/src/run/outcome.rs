@@ -86,6 +86,20 @@ pub struct ChannelResult {
 }
 
 impl ChannelResult {
+    /// Limits u_n to nonnegative values when E ≥ 0 (ρ ≥ 0 always) and
+    /// u_n has negative ones; the element estimates grow by the change.
+    pub(crate) fn limit_negative(&mut self) {
+        if self.emission.iter().any(|&e| e < 0.0) {
+            return;
+        }
+        self.limited = self.solution.limited_nonnegative();
+        if let (Some((_, lim)), Some(e)) = (&self.limited, &mut self.estimate) {
+            for (x, c) in e.elements.iter_mut().zip(&lim.change) {
+                *x += c;
+            }
+        }
+    }
+
     /// The solution to show (images, vertex meshes): the limited one when
     /// there is one, else u_n.
     pub fn shown(&self) -> &Solution {

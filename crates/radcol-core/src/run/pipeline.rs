@@ -20,7 +20,6 @@ use crate::mesh::Mesh;
 use crate::nodes::NodeSet;
 use crate::norms::error_norms;
 use crate::problem::Problem;
-use crate::solve::LinearOperator;
 use crate::visibility::VisibilityAnalysis;
 use std::sync::Arc;
 use std::time::Instant;
@@ -403,7 +402,7 @@ impl Stages<'_> {
         let estimate_s = t.elapsed().as_secs_f64();
         Error::if_cancelled(cfg.progress.as_ref(), "estimate")?;
         if cfg.limit_negative {
-            channels.iter_mut().for_each(limit_negative);
+            channels.iter_mut().for_each(ChannelResult::limit_negative);
         }
 
         let outcome = SolveOutcome {
@@ -435,47 +434,6 @@ impl Stages<'_> {
                 check,
             },
         ))
-    }
-}
-
-/// Limits `ch`'s u_n to nonnegative values when E ≥ 0 (ρ ≥ 0 always) and
-/// u_n has negative ones; the element estimates grow by the change.
-pub(crate) fn limit_negative(ch: &mut ChannelResult) {
-    if ch.emission.iter().any(|&e| e < 0.0) {
-        return;
-    }
-    ch.limited = ch.solution.limited_nonnegative();
-    if let (Some((_, lim)), Some(e)) = (&ch.limited, &mut ch.estimate) {
-        for (x, c) in e.elements.iter_mut().zip(&lim.change) {
-            *x += c;
-        }
-    }
-}
-
-/// ‖b - A x‖ / ‖b‖ (‖A x‖-free: 0 when b = 0 and x = 0).
-pub fn true_residual(op: &dyn LinearOperator, x: &[f64], b: &[f64]) -> f64 {
-    // Relative residuals do not change when x and b are scaled together; at
-    // max |b_i| = 1 the sums of squares neither overflow nor underflow.
-    let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let scale = if scale > 0.0 { scale } else { 1.0 };
-    let xs: Vec<f64> = x.iter().map(|v| v / scale).collect();
-    let mut ax = vec![0.0; b.len()];
-    op.apply(&xs, &mut ax);
-    let num: f64 = ax
-        .iter()
-        .zip(b)
-        .map(|(a, b)| (b / scale - a) * (b / scale - a))
-        .sum::<f64>()
-        .sqrt();
-    let den: f64 = b
-        .iter()
-        .map(|v| (v / scale) * (v / scale))
-        .sum::<f64>()
-        .sqrt();
-    if den > 0.0 {
-        num / den
-    } else {
-        num
     }
 }
 

@@ -5,7 +5,6 @@
 //! LU factors are kept while ρ stays the same).
 
 use super::inputs::{fields, NodalFields};
-use super::pipeline::{limit_negative, true_residual};
 use super::GeometricOperator;
 use super::{ChannelResult, SolveConfig, SolveOutcome, SolverKind, SolverReport};
 use crate::discretization::Discretization;
@@ -90,7 +89,7 @@ impl<'a> Relighter<'a> {
             first.errors = Some(error_norms(&first.solution, exact));
         }
         if self.cfg.limit_negative {
-            channels.iter_mut().for_each(limit_negative);
+            channels.iter_mut().for_each(ChannelResult::limit_negative);
         }
         Ok(channels)
     }
@@ -249,7 +248,7 @@ impl<'a> Relighter<'a> {
         Ok(SolverReport {
             kind: SolverKind::Lu,
             iterations: 0,
-            residual: true_residual(&op, x, emission),
+            residual: crate::solve::true_residual(&op, x, emission),
             growth: None,
             condition: Some(*kappa),
             at_rounding_floor: false,

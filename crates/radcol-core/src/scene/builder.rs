@@ -1,7 +1,8 @@
 //! [`SceneBuilder`]: scenes from vertex and index buffers, for programs that
 //! embed radcol.
 
-use super::validate::{check_material, finish, RawScene, RawTriangle};
+use super::raw::{RawScene, RawTriangle};
+use super::validate::{check_material, finish};
 use super::{Material, Scene, SceneError, TriangleOrigin};
 use crate::camera::Camera;
 use glam::{DVec3, Vec3};

@@ -6,7 +6,7 @@
 //! gets one warning for the whole.
 
 use super::overlap::plane_key;
-use super::validate::{Capped, RawTriangle};
+use super::raw::{Capped, RawTriangle};
 use super::Material;
 use glam::DVec3;
 use std::collections::HashSet;

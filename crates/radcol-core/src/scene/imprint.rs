@@ -11,7 +11,7 @@
 //! triangle with the segments as constraints (spade), makes the line an
 //! element edge at every level.
 
-use super::validate::RawTriangle;
+use super::raw::RawTriangle;
 use glam::DVec3;
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
 

@@ -37,6 +37,8 @@ mod mtl;
 mod obj;
 mod overlap;
 mod polygon;
+mod raw;
+mod scan;
 mod tobj_match;
 mod validate;
 

@@ -1,7 +1,7 @@
 //! MTL input: the materials of an OBJ's `mtllib` statements, `Kd` as ρ
 //! and `Ke` as E, every statement with its line.
 
-use super::obj::{rest, syntax};
+use super::scan::{rest, syntax};
 use super::validate::check_material;
 use super::{Material, SceneError};
 

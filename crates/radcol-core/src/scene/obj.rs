@@ -13,7 +13,9 @@
 //! warning. Polygons are triangulated whatever their convexity
 //! ([`super::polygon`]); a face may have up to [`MAX_FACE_VERTICES`] vertices.
 
-use super::validate::{finish, RawScene};
+use super::raw::RawScene;
+use super::scan::{rest, syntax, ScanFace};
+use super::validate::finish;
 use super::{Material, Scene, SceneError};
 use glam::DVec3;
 use std::collections::HashMap;
@@ -98,33 +100,10 @@ pub fn load_obj_str(name: &str, obj: &str, mtl: &[(&str, &str)]) -> Result<Scene
     parse(name, &format!("{name}.obj"), obj, &resolve)
 }
 
-/// A face as the line scan read it.
-#[derive(Debug)]
-pub(super) struct ScanFace {
-    pub(super) line: usize,
-    pub(super) group: String,
-    pub(super) material: usize,
-    pub(super) vertices: Vec<usize>,
-    /// The texture coordinates of its vertices (v down), when all have them.
-    pub(super) uvs: Option<Vec<[f64; 2]>>,
-}
-
 /// The texture coordinates of a face's vertices, when all have them.
 type FaceUvs = Option<Vec<[f64; 2]>>;
 
 type Resolver<'a> = dyn Fn(&str) -> Result<(String, String), (PathBuf, String)> + 'a;
-
-pub(super) fn syntax(at: String, message: impl Into<String>) -> SceneError {
-    SceneError::Syntax {
-        at,
-        message: message.into(),
-    }
-}
-
-/// The rest of a statement after its keyword, trimmed.
-pub(super) fn rest<'a>(line: &'a str, keyword: &str) -> &'a str {
-    line[keyword.len()..].trim()
-}
 
 fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene, SceneError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);

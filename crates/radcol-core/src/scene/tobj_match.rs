@@ -2,8 +2,8 @@
 //! [`super::obj`]): polygon by polygon, the same group, material and
 //! positions, then each polygon triangulated ([`super::polygon`]).
 
-use super::obj::ScanFace;
-use super::validate::{Capped, RawTriangle};
+use super::raw::{Capped, RawTriangle};
+use super::scan::ScanFace;
 use super::{Material, SceneError, TriangleOrigin};
 use glam::DVec3;
 use std::collections::HashMap;

@@ -1,81 +1,16 @@
 //! Shared checks and repairs of every scene input: triangles with their origin
 //! (file:line or group/face) become a [`Scene`], or a [`SceneError`].
 
-use super::{Material, Scene, SceneError, TriangleOrigin, MAX_WARNINGS_PER_KIND};
-use crate::camera::Camera;
+use super::raw::{Capped, RawScene, RawTriangle};
+use super::{Material, Scene, SceneError};
 use crate::geometry::{Identity, Patch, Surface};
 use crate::visibility::is_convex_enclosure;
 use glam::DVec3;
 use std::collections::HashMap;
-use std::path::PathBuf;
 use std::sync::Arc;
 
 /// The warning of a scene none of whose triangles emits.
 pub(super) const NO_EMITTER: &str = "no triangle's material emits light (every Ke or emissive factor is zero): the solution is zero everywhere until an emission is given (relighting can give one)";
-
-/// One input triangle before checks.
-#[derive(Clone, Debug)]
-pub(crate) struct RawTriangle {
-    /// Group (OBJ `g`/`o`, builder mesh name).
-    pub group: String,
-    /// Index into the scene's materials.
-    pub material: usize,
-    /// World positions, front face counter-clockwise.
-    pub vertices: [DVec3; 3],
-    /// Where it came from, for messages ("a.obj:12", "mesh 'floor' face 3").
-    pub at: String,
-    /// Texture coordinates of the vertices (OBJ `vt`, glTF TEXCOORD_n), v
-    /// down from the image's top edge as in glTF.
-    pub uv: Option<[[f64; 2]; 3]>,
-    /// The input triangle it is, or a piece of.
-    pub origin: TriangleOrigin,
-}
-
-/// Everything a loader gathered, before the shared checks.
-#[derive(Debug)]
-pub(crate) struct RawScene {
-    pub name: String,
-    pub materials: Vec<Material>,
-    pub triangles: Vec<RawTriangle>,
-    pub camera: Option<Camera>,
-    pub warnings: Vec<String>,
-    pub source: Option<PathBuf>,
-}
-
-/// Collects warnings of one kind, listing the first few and counting the rest.
-pub(crate) struct Capped<'a> {
-    out: &'a mut Vec<String>,
-    kind: &'static str,
-    count: usize,
-}
-
-impl<'a> Capped<'a> {
-    pub(crate) fn new(out: &'a mut Vec<String>, kind: &'static str) -> Self {
-        Self {
-            out,
-            kind,
-            count: 0,
-        }
-    }
-    pub(crate) fn push(&mut self, message: String) {
-        if self.count < MAX_WARNINGS_PER_KIND {
-            self.out.push(message);
-        }
-        self.count += 1;
-    }
-}
-
-impl Drop for Capped<'_> {
-    fn drop(&mut self) {
-        if self.count > MAX_WARNINGS_PER_KIND {
-            self.out.push(format!(
-                "... and {} more {} warnings",
-                self.count - MAX_WARNINGS_PER_KIND,
-                self.kind
-            ));
-        }
-    }
-}
 
 /// Bit pattern of a position, for exact hashing.
 fn key(v: DVec3) -> [u64; 3] {

@@ -13,10 +13,12 @@
 mod gmres;
 mod lockstep;
 mod lu;
+mod residual;
 
 pub use gmres::{gmres, gmres_observed, GmresInfo, GmresParams, ROUNDING_FLOOR};
 pub use lockstep::{gmres_radiosity, RadiositySystem};
 pub use lu::DenseLu;
+pub use residual::true_residual;
 
 use crate::matrix::{dot, dots, DenseMatrix};
 use rayon::prelude::*;

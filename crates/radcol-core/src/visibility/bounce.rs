@@ -21,7 +21,7 @@
 //! partly visible pairs have small masses: a budget of 1e-3 per point covers
 //! 61 % of them with the whole bunny, 1e-2 covers 87 %.
 
-use super::walk::{PartialRow, Plane};
+use super::Plane;
 use super::{clip, Occluders};
 use glam::DVec3;
 
@@ -40,7 +40,7 @@ pub(crate) struct Bounce<'a> {
 
 /// The relative tolerance of an approximated pair's unoccluded integral:
 /// its error, at most this share of the pair's mass, is far below the mass
-/// that bounds the visibility's ([`totals`] adds it to the bound).
+/// that bounds the visibility's (the plan's bound adds it).
 pub(crate) const APPROX_TOL: f64 = 1e-6;
 
 /// Pieces per edge of [`mass_bound`]'s split of an element.
@@ -135,21 +135,6 @@ pub(crate) fn visible_fraction(p: DVec3, v: &[DVec3; 3], occ: &Occluders, cands:
         .filter(|&&q| !cands.iter().any(|&i| clip::blocks(p, q, occ.get(i))))
         .count();
     seen as f64 / targets.len() as f64
-}
-
-/// Over a plan's partial rows: the approximated pairs (row points ×
-/// elements, `nodes_per` row points in row block kp) and the largest sum of
-/// mass bounds at a row point.
-pub(crate) fn totals(rows: &[PartialRow], nodes_per: impl Fn(usize) -> usize) -> (u64, f64) {
-    let (pairs, most) = rows
-        .iter()
-        .enumerate()
-        .fold((0, 0.0), |(pairs, bound), (kp, r)| {
-            let f = nodes_per(kp);
-            let most = r.bound_sums(f).into_iter().fold(bound, f64::max);
-            (pairs + (r.approximated() * f) as u64, most)
-        });
-    (pairs, most * (1.0 + APPROX_TOL))
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 //! elements): its facet planes, to place a BVH box against it, and a
 //! superset of its separating axes, for the exact test of one triangle.
 
-use super::occluders::Occluder;
+use super::occluder::Occluder;
 use crate::geometry::bounds;
 use glam::DVec3;
 

@@ -8,11 +8,16 @@
 pub(crate) mod bounce;
 pub mod clip;
 mod hull;
+mod occluder;
 pub mod occluders;
+pub(crate) mod partial_row;
 pub(crate) mod sealed;
 pub(crate) mod walk;
 
 pub use occluders::Occluders;
+
+/// A flat triangle's mapped vertices and unit normal.
+pub(crate) type Plane = ([DVec3; 3], DVec3);
 
 use crate::error::InputError;
 use crate::geometry::Surface;

@@ -21,14 +21,7 @@ use obvhs::bvh2::Bvh2;
 use obvhs::{Boundable, BvhBuildParams};
 use std::time::Duration;
 
-/// A triangle of the scene that may occlude, with its unit normal.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Occluder {
-    /// Vertices.
-    pub v: [DVec3; 3],
-    /// Unit normal (b - a) × (c - a) / |…|.
-    pub normal: DVec3,
-}
+pub use super::occluder::Occluder;
 
 /// A padded f32 box around one triangle, for the BVH builder.
 struct PaddedBox(Aabb);

@@ -21,7 +21,7 @@
 //! Behind a closed mesh about half its triangles face away from an element,
 //! and the polygon overlay of the merged shadows crosses fewer edges.
 
-use super::occluders::Occluder;
+use super::occluder::Occluder;
 use glam::DVec3;
 use std::collections::HashMap;
 

@@ -26,6 +26,7 @@
 pub mod kernels;
 mod pack;
 mod readback;
+mod slot;
 mod stream;
 
 pub use kernels::FarFieldKernels;

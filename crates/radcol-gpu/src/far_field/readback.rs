@@ -1,7 +1,7 @@
 //! Reading tiles back: wait for a tile's submission, map its staging buffer,
 //! widen it into the host matrix, and read its pass's timestamps.
 
-use super::stream::Slot;
+use super::slot::Slot;
 use crate::error::GpuError;
 use crate::layout::GpuScalar;
 use crate::tiling::Tile;

@@ -5,6 +5,7 @@
 use super::kernels::FarFieldKernels;
 use super::pack::{far_points, tile_codes, tile_params, Rules};
 use super::readback::{drain, Pending, ReadBack};
+use super::slot::Slot;
 use super::FarFieldReport;
 use crate::error::GpuError;
 use crate::layout::{GpuScalar, Params};
@@ -12,16 +13,6 @@ use crate::tiling::{TileLimits, TilePlan, WORKGROUP_X};
 use radcol_core::assembly::AssemblyPlan;
 use std::mem::size_of;
 use wgpu::util::DeviceExt;
-
-/// One of the two alternating sets of per-tile buffers.
-pub(super) struct Slot {
-    params: wgpu::Buffer,
-    classes: wgpu::Buffer,
-    tile: wgpu::Buffer,
-    pub(super) staging: wgpu::Buffer,
-    resolve: Option<wgpu::Buffer>,
-    bind_group: wgpu::BindGroup,
-}
 
 /// The read-only buffers every tile binds.
 struct Static {

@@ -230,7 +230,7 @@ impl AssemblyPlan {
         let (mut stats, used) = count(&classes, rows.as_deref().unwrap_or(&disc), &ladder);
         let row_disc = rows.as_deref().unwrap_or(&disc);
         (stats.pairs_approximate, stats.visibility_bound) =
-            crate::visibility::bounce::totals(&partial, |kp| row_disc.nodes_per(kp));
+            crate::visibility::walk::totals(&partial, |kp| row_disc.nodes_per(kp));
         let flat = tables::flat_elements(disc.mesh());
         let tables = (0..=MAX_RULE_DEGREE)
             .map(|d| used[d].then(|| tables::build_table(&disc, &ladder, d, flat.as_ref())))
