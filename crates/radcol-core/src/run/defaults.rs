@@ -38,9 +38,9 @@ pub const REFERENCE_LEVEL: u32 = 2;
 /// The visibility budget of a solve that approximates the visibility of
 /// bounce pairs ([`crate::assembly::QuadratureOptions::visibility_budget`])
 /// when none is given: per point, at most a thousandth of its view. On the
-/// bunny room at r = 1 on its own triangles that approximates 61 % of the
-/// partly visible pairs (`cargo run --release -p radcol-benches --example
-/// partial_mass`); an adaptive solve lowers it to what its target allows
+/// bunny room at r = 1 on its own triangles that approximates 36 % of the
+/// partly visible pairs (356 454 of 982 521; docs/visibility.md); an
+/// adaptive solve lowers it to what its target allows
 /// ([`visibility_budget_for`]).
 pub const DEFAULT_VISIBILITY_BUDGET: f64 = 1e-3;
 

@@ -17,9 +17,11 @@
 //! The masses are bounded, not integrated ([`mass_bound`]), so the budget
 //! holds however close the element is; pairs whose bound exceeds τ stay
 //! exact. Measured on the bunny room at r = 1 on its own triangles
-//! (`cargo run --release -p radcol-benches --example partial_mass`), most
-//! partly visible pairs have small masses: a budget of 1e-3 per point covers
-//! 61 % of them with the whole bunny, 1e-2 covers 87 %.
+//! (`cargo run --release -p radcol-benches --example partial_mass`, masses
+//! integrated and weighted by ρ), most partly visible pairs have small
+//! masses: a budget of 1e-3 per point would cover 61 % of them with the
+//! whole bunny, 1e-2 87 %; with these bounds and unweighted masses, 1e-3
+//! covers 36 % (docs/visibility.md).
 
 use super::Plane;
 use super::{clip, Occluders};
