@@ -148,13 +148,8 @@ mod tests {
     /// (near and far), and zero when either side faces away.
     #[test]
     fn the_mass_bound_bounds_the_mass() {
-        let mut seed = 7u64;
-        let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut unit = crate::testing::uniform(0x6a09e667f3bcc909);
+        let mut rnd = || unit() - 0.5;
         let mut tight = 0usize;
         for case in 0..400 {
             let v = [0, 1, 2].map(|_| DVec3::new(rnd(), rnd(), 0.2 * rnd()));
