@@ -20,6 +20,7 @@ mod gltf_input;
 mod gpu_conformance;
 mod gpu_select;
 mod gpu_solve;
+mod graded;
 mod hmatrix;
 mod house;
 mod hp;

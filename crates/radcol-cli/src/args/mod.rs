@@ -95,7 +95,8 @@ pub struct ProblemArgs {
     /// Polynomial degree r of the collocation space.
     #[arg(help_heading = "Method", long, short = 'r', value_name = "R",
           help = format!("Polynomial degree r of the collocation space, 0..=6 [default: \
-{DEFAULT_DEGREE}; for `solve --target-error`, {ADAPTIVE_DEGREE} (docs/accuracy.md)]"))]
+{DEFAULT_DEGREE}; for `solve --target-error`, {ADAPTIVE_DEGREE}, with the scene's small triangles \
+starting lower (docs/accuracy.md); given, every element starts at R]"))]
     pub degree: Option<usize>,
 
     /// Node parameter α in (0, 1/3), or `auto`: of the α at which the node rule gains a

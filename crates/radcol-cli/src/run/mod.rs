@@ -221,8 +221,10 @@ fn run_comparison(job: StudyJob, w: &mut dyn Write) -> Result<()> {
         settings.extend(uniform_settings(r, &rows));
         let adaptive = match job.adaptive {
             Some(target) => {
+                // A study compares degrees: each runs at its own.
                 let opts = AdaptOptions {
                     target,
+                    graded_start: false,
                     ..Default::default()
                 };
                 let res = solve_adaptive(&s.problem, &s.cfg, &opts, s.backend.as_ref(), |_| {})

@@ -216,10 +216,16 @@ fn solve_job(a: SolveArgs) -> Result<SolveJob> {
     if a.hp {
         problem.backend = hp_backend(problem.backend, problem.precision)?;
     }
+    // An explicit --degree is every element's degree; by default small
+    // elements start lower.
     let adapt = a
         .target_error
         .map(|t| adapt(t, (a.max_unknowns, a.max_steps, a.hp), &problem))
-        .transpose()?;
+        .transpose()?
+        .map(|o| AdaptOptions {
+            graded_start: a.problem.degree.is_none(),
+            ..o
+        });
     if adapt.is_some() && !a.relight.is_empty() {
         return Err(bad_input(
             "--relight solves again on one assembled matrix: it cannot be used with --target-error, whose mesh follows the first lights",

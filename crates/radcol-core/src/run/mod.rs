@@ -30,8 +30,8 @@ pub use cost::{
     PREDICT_PLAN_ABOVE,
 };
 pub use defaults::{
-    visibility_budget_for, StartMesh, ADAPTIVE_DEGREE, DEFAULT_DEGREE, DEFAULT_EDGE_FRACTION,
-    DEFAULT_LEVEL, DEFAULT_VISIBILITY_BUDGET, REFERENCE_LEVEL,
+    start_degree, visibility_budget_for, StartMesh, ADAPTIVE_DEGREE, DEFAULT_DEGREE,
+    DEFAULT_EDGE_FRACTION, DEFAULT_LEVEL, DEFAULT_VISIBILITY_BUDGET, REFERENCE_LEVEL,
 };
 pub use inputs::{check_size, discretize, MAX_EXTENT, MIN_EXTENT};
 pub use operator::{GeometricOperator, OperatorChoice, OperatorDecision, OperatorKind};

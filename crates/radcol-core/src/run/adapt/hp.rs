@@ -35,12 +35,14 @@
 //! steps are more, and cost more per unknown (more elements of degree 1).
 //! So it is an option, not the default.
 
+use super::AdaptOptions;
 use crate::alpha0::auto_alpha;
 use crate::assembly::AssemblyBackend;
 use crate::error::Error;
+use crate::mesh::Mesh;
 use crate::nodes::{NodeSet, MAX_DEGREE};
 use crate::norms::LATTICE;
-use crate::run::{SolveConfig, SolveOutcome};
+use crate::run::{start_degree, SolveConfig, SolveOutcome};
 use crate::solution::Solution;
 
 /// The highest degree hp raises an element to: the study in
@@ -134,10 +136,36 @@ pub struct Degrees {
     degree: Vec<usize>,
     /// Per element.
     lineage: Vec<Lineage>,
+    /// Whether a marked element may be raised or lowered (else it is split
+    /// at its degree).
+    hp: bool,
 }
 
 impl Degrees {
-    /// `n` elements of `cfg`'s degree, on the starting mesh.
+    /// The degrees of the loop's starting `mesh`, or None when every element
+    /// has `cfg`'s degree and the loop keeps it (no hp): with `opts.hp`, or
+    /// a graded start ([`start_degree`]) on the CPU backend that lowers
+    /// some element's degree.
+    pub fn start(
+        cfg: &SolveConfig,
+        mesh: &Mesh,
+        opts: &AdaptOptions,
+        backend: &dyn AssemblyBackend,
+    ) -> Result<Option<Self>, Error> {
+        let mut d = Self::new(cfg, mesh.len())?;
+        d.hp = opts.hp;
+        if opts.graded_start && backend.info().kind == crate::backend::BackendKind::Cpu {
+            let diagonal = super::diagonal(mesh);
+            for (k, r) in d.degree.iter_mut().enumerate() {
+                let h = super::longest_edge(mesh, k);
+                *r = start_degree(h, diagonal, opts.target, cfg.degree);
+            }
+        }
+        let graded = d.degree.iter().any(|&r| r != cfg.degree);
+        Ok((opts.hp || graded).then_some(d))
+    }
+
+    /// `n` elements of `cfg`'s degree, on the starting mesh, with hp.
     pub fn new(cfg: &SolveConfig, n: usize) -> Result<Self, Error> {
         let top = cfg.degree.clamp(HP_MAX_DEGREE, MAX_DEGREE);
         let sets = (0..=top)
@@ -154,6 +182,7 @@ impl Degrees {
             sets,
             degree: vec![cfg.degree; n],
             lineage: vec![Lineage::Start; n],
+            hp: true,
         })
     }
 
@@ -185,6 +214,9 @@ impl Degrees {
             .iter()
             .map(|&k| {
                 let r = self.degree[k];
+                if !self.hp {
+                    return Change::Split;
+                }
                 let theta = || self.theta(out, k);
                 choose(r, indicator[k], self.lineage[k], negative[k], &theta)
             })
@@ -220,6 +252,7 @@ impl Degrees {
             sets: self.sets.clone(),
             degree,
             lineage,
+            hp: self.hp,
         }
     }
 

@@ -153,11 +153,8 @@ pub fn solve_adaptive(
     hp::check_backend(opts.hp, backend)?;
     let cfg = step_config(problem, cfg, opts);
     let mut mesh = discretize(problem, &cfg)?.mesh().clone();
-    // With hp, every element's degree and how it came to be.
-    let mut degrees = opts
-        .hp
-        .then(|| Degrees::new(&cfg, mesh.len()))
-        .transpose()?;
+    // With hp or a graded start, every element's degree and how it came to be.
+    let mut degrees = Degrees::start(&cfg, &mesh, opts, backend)?;
     let mut guess: Option<Vec<Vec<f64>>> = None;
     let mut history = History::new(mesh.len(), opts.stall_generations as usize);
     let floor = opts.min_size * diagonal(&mesh);

@@ -51,7 +51,7 @@ pub(super) struct Carried {
     pub(super) history: History,
     /// Which elements it shares with the previous mesh.
     pub(super) unchanged: Arc<Unchanged>,
-    /// With hp, every element's degree and lineage.
+    /// With a degree per element, every element's degree and lineage.
     pub(super) degrees: Option<Degrees>,
 }
 
@@ -90,7 +90,7 @@ struct Next {
     changed: Vec<bool>,
     /// New elements one degree lower than their parent.
     lowered: Vec<usize>,
-    /// With hp, every new element's degree and lineage.
+    /// With a degree per element, every new element's degree and lineage.
     degrees: Option<Degrees>,
 }
 
