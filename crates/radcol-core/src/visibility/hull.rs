@@ -109,8 +109,21 @@ impl Facets {
 /// of all its point triples and its point-to-point edges (a superset of the
 /// hull's face normals and edges, so the separating-axis theorem stays exact).
 pub(crate) struct HullAxes {
-    normals: Vec<DVec3>,
+    /// The triple normals, each with the hull's extent along it (the same
+    /// for every triangle tested, so found once).
+    normals: Vec<(DVec3, f64, f64)>,
     edges: Vec<DVec3>,
+}
+
+/// The least and the greatest of `pts` along `axis`.
+fn extent(pts: &[DVec3], axis: DVec3) -> (f64, f64) {
+    let (mut h0, mut h1) = (f64::INFINITY, f64::NEG_INFINITY);
+    for p in pts {
+        let d = p.dot(axis);
+        h0 = h0.min(d);
+        h1 = h1.max(d);
+    }
+    (h0, h1)
 }
 
 impl HullAxes {
@@ -127,7 +140,8 @@ impl HullAxes {
                 for k in j + 1..m {
                     let n = e.cross(pts[k] - pts[i]);
                     if n.length_squared() > 0.0 {
-                        normals.push(n);
+                        let (h0, h1) = extent(pts, n);
+                        normals.push((n, h0, h1));
                     }
                 }
             }
@@ -139,32 +153,25 @@ impl HullAxes {
     /// along every candidate axis (the separating-axis theorem for convex
     /// polytopes, with touching counted as separated).
     pub(crate) fn meets(&self, pts: &[DVec3], t: &Occluder, tol: f64) -> bool {
-        let separated = |axis: DVec3| -> bool {
+        // Separated along `axis` (the hull's extent along it `hull`, or
+        // found here).
+        let separated_given = |axis: DVec3, hull: Option<(f64, f64)>| -> bool {
             let len2 = axis.length_squared();
             if len2.is_nan() || len2 <= 0.0 {
                 return false;
             }
-            let (mut h0, mut h1) = (f64::INFINITY, f64::NEG_INFINITY);
-            for p in pts {
-                let d = p.dot(axis);
-                h0 = h0.min(d);
-                h1 = h1.max(d);
-            }
-            let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
-            for v in &t.v {
-                let d = v.dot(axis);
-                t0 = t0.min(d);
-                t1 = t1.max(d);
-            }
+            let (h0, h1) = hull.unwrap_or_else(|| extent(pts, axis));
+            let (t0, t1) = extent(&t.v, axis);
             // Overlap (h1 - t0 or t1 - h0, whichever is smaller) of at most
             // tol · |axis|, decided without a square root when it is clear.
             let overlap = (h1 - t0).min(t1 - h0);
             overlap <= 0.0 || overlap * overlap <= tol * tol * len2
         };
+        let separated = |axis: DVec3| separated_given(axis, None);
         if separated(t.normal) {
             return false;
         }
-        if self.normals.iter().any(|&n| separated(n)) {
+        if (self.normals.iter()).any(|&(n, h0, h1)| separated_given(n, Some((h0, h1)))) {
             return false;
         }
         let te = [t.v[1] - t.v[0], t.v[2] - t.v[1], t.v[0] - t.v[2]];
