@@ -127,11 +127,10 @@ pub(crate) fn choose(
 }
 
 /// The fraction of four rays from `p` to points of the triangle `v` (its
-/// centroid and the midpoints between it and each vertex) that none of the
-/// occluders `cands` blocks.
+/// centroid and the midpoints between it and each vertex:
+/// [`clip::ray_targets`]) that none of the occluders `cands` blocks.
 pub(crate) fn visible_fraction(p: DVec3, v: &[DVec3; 3], occ: &Occluders, cands: &[u32]) -> f64 {
-    let c = (v[0] + v[1] + v[2]) / 3.0;
-    let targets = [c, 0.5 * (c + v[0]), 0.5 * (c + v[1]), 0.5 * (c + v[2])];
+    let targets = clip::ray_targets(v);
     let seen = targets
         .iter()
         .filter(|&&q| !cands.iter().any(|&i| clip::blocks(p, q, occ.get(i))))

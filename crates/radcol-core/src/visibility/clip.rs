@@ -90,6 +90,33 @@ pub fn blocks(p: DVec3, q: DVec3, t: &super::occluders::Occluder) -> bool {
     super::occluders::crosses(p, q, t, 0.0)
 }
 
+/// Four points of the triangle `v` that rays are sent to: its centroid and
+/// the midpoints between it and each vertex.
+pub(crate) fn ray_targets(v: &[DVec3; 3]) -> [DVec3; 4] {
+    let c = (v[0] + v[1] + v[2]) / 3.0;
+    [c, 0.5 * (c + v[0]), 0.5 * (c + v[1]), 0.5 * (c + v[2])]
+}
+
+/// True when the point `p` (unit normal `n_p`) sees one of the
+/// [`ray_targets`] of `v` in front of its tangent plane past every occluder
+/// of `cands` (none blocks the segment: [`blocks`]). Then what `p` sees of
+/// `v` is not empty, short of a ray grazing an occluder's edge (a set of
+/// measure zero, where it may be). A cheap test before [`visible_region`]
+/// when only emptiness is asked: a ray costs a few products per occluder,
+/// a clip a polygon overlay.
+pub(crate) fn sees_a_point(
+    p: DVec3,
+    n_p: DVec3,
+    v: &[DVec3; 3],
+    occ: &Occluders,
+    cands: &[u32],
+) -> bool {
+    let tol = 1e-9 * occ.scale();
+    ray_targets(v).iter().any(|&q| {
+        (q - p).dot(n_p) > tol && !cands.iter().any(|&i| blocks(p, q, occ.get(i)))
+    })
+}
+
 /// Above this many candidate occluders, their shadows are merged into one
 /// region before it is taken from the element (`merged`); up to it they
 /// are subtracted one by one (`subtracted`), which is exact to rounding
