@@ -4,7 +4,7 @@
 
 use radcol_core::hmatrix::{HStats, SampledSize};
 use radcol_core::run::operator::SAMPLED_ROWS;
-use radcol_core::run::{MemoryUse, OperatorKind, SolveOutcome};
+use radcol_core::run::{MemoryUse, OperatorChoice, OperatorDecision, OperatorKind, SolveOutcome};
 use serde::Serialize;
 use std::fmt;
 
@@ -35,7 +35,7 @@ impl OperatorReport {
     pub fn new(out: &SolveOutcome) -> Self {
         Self {
             kind: out.operator.kind(),
-            reason: out.operator_decision.reason.clone(),
+            reason: with_flag(&out.operator_decision),
             bytes: out.operator.heap_bytes(),
             compression: out.operator.stats(),
             sampled_error: out.operator_decision.sampled_error,
@@ -43,6 +43,21 @@ impl OperatorReport {
             planned_bytes: out.operator_decision.planned_bytes,
             sampled_size: out.operator_decision.sampled_bytes,
         }
+    }
+}
+
+/// The decision's reason, with the flag that asks for the other operator
+/// when the choice was automatic, or the one that asked for it.
+fn with_flag(d: &OperatorDecision) -> String {
+    let name = match d.kind {
+        OperatorKind::Dense => "dense",
+        OperatorKind::Compressed => "compressed",
+    };
+    match d.instead {
+        Some(OperatorChoice::Compressed) => format!("{} (--operator compressed)", d.reason),
+        Some(_) => format!("{} (--operator dense keeps the dense matrix)", d.reason),
+        None if d.asked => format!("{} (--operator {name})", d.reason),
+        None => d.reason.clone(),
     }
 }
 

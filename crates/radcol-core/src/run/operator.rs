@@ -43,8 +43,16 @@ pub enum OperatorKind {
 pub struct OperatorDecision {
     /// Dense or compressed.
     pub kind: OperatorKind,
-    /// One sentence: asked for, or the sizes that decided.
+    /// One sentence: asked for, or the sizes that decided (naming no
+    /// setting: [`OperatorDecision::instead`] is the one to change).
     pub reason: String,
+    /// When the choice was automatic and the other would fit, the
+    /// [`OperatorChoice`] that makes it ([`SolveConfig::operator`]); None
+    /// when the choice was asked for, or is the only one that fits.
+    pub instead: Option<OperatorChoice>,
+    /// The caller asked for this kind ([`OperatorChoice::Dense`] or
+    /// [`OperatorChoice::Compressed`]).
+    pub asked: bool,
     /// Auto chose dense by the matrix alone: the pipeline compresses
     /// instead when the dense solve's whole peak does not fit.
     #[serde(skip)]
@@ -76,6 +84,8 @@ impl OperatorDecision {
         Self {
             kind: OperatorKind::Compressed,
             reason: format!("the dense solve would not fit ({why}); compressed instead"),
+            instead: None,
+            asked: false,
             switchable: false,
             sampled_error: None,
             predicted_bytes: None,
@@ -103,10 +113,12 @@ pub fn decide(
     }
     let estimate = MemoryEstimate::with_available(unknowns, available);
     let gib = |b: f64| format!("{:.2} GiB", b / (1u64 << 30) as f64);
-    let decision = |kind, reason: String| {
+    let decision = |kind, reason: String, instead, asked| {
         Ok(OperatorDecision {
             kind,
             reason,
+            instead,
+            asked,
             switchable: false,
             sampled_error: None,
             predicted_bytes: None,
@@ -118,21 +130,27 @@ pub fn decide(
         (OperatorChoice::Compressed, SolverKind::Lu) => Err(InputError::CompressedLu),
         (OperatorChoice::Compressed, _) => decision(
             OperatorKind::Compressed,
-            format!("asked for (--operator compressed), tolerance {tol:e}"),
+            format!("asked for, tolerance {tol:e}"),
+            None,
+            true,
         ),
         (OperatorChoice::Dense, _) => {
-            decision(OperatorKind::Dense, "asked for (--operator dense)".into())
+            decision(OperatorKind::Dense, "asked for".into(), None, true)
         }
         (OperatorChoice::Auto, SolverKind::Lu) => decision(
             OperatorKind::Dense,
-            "LU needs the dense matrix (--solver lu)".into(),
+            "LU needs the dense matrix".into(),
+            None,
+            false,
         ),
         (OperatorChoice::Auto, SolverKind::Gmres) if estimate.fits_gmres => Ok(OperatorDecision {
             kind: OperatorKind::Dense,
             reason: format!(
-                "the dense matrix ({}) fits in memory, and assembles faster than the compressed one; --operator compressed stores less",
+                "the dense matrix ({}) fits in memory, and assembles faster than the compressed one, which stores less",
                 gib(estimate.matrix_bytes)
             ),
+            instead: Some(OperatorChoice::Compressed),
+            asked: false,
             switchable: true,
             sampled_error: None,
             predicted_bytes: None,
@@ -146,6 +164,8 @@ pub fn decide(
                 gib(estimate.matrix_bytes),
                 gib(available.unwrap_or(0) as f64)
             ),
+            None,
+            false,
         ),
     }
 }
@@ -223,13 +243,15 @@ pub(crate) fn lighter_than_dense(
     Some(OperatorDecision {
         kind: OperatorKind::Compressed,
         reason: format!(
-            "the dense solve would take {} of the {} of memory available, and the compressed operator is predicted from the geometry at {} ({:.1} % of the dense matrix); compressed to tolerance {:e} (--operator dense keeps the dense matrix)",
+            "the dense solve would take {} of the {} of memory available, and the compressed operator is predicted from the geometry at {} ({:.1} % of the dense matrix); compressed to tolerance {:e}",
             gib(to_come),
             gib(available),
             gib(p.bytes()),
             100.0 * p.bytes() / dense,
             cfg.compression.tol
         ),
+        instead: Some(OperatorChoice::Dense),
+        asked: false,
         switchable: false,
         sampled_error: None,
         predicted_bytes: Some(p.bytes()),

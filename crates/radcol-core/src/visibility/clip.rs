@@ -112,9 +112,9 @@ pub(crate) fn sees_a_point(
     cands: &[u32],
 ) -> bool {
     let tol = 1e-9 * occ.scale();
-    ray_targets(v).iter().any(|&q| {
-        (q - p).dot(n_p) > tol && !cands.iter().any(|&i| blocks(p, q, occ.get(i)))
-    })
+    ray_targets(v)
+        .iter()
+        .any(|&q| (q - p).dot(n_p) > tol && !cands.iter().any(|&i| blocks(p, q, occ.get(i))))
 }
 
 /// Above this many candidate occluders, their shadows are merged into one
