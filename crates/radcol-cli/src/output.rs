@@ -59,7 +59,9 @@ pub fn write_all(
                 ));
             }
             let camera = look.camera.unwrap_or_else(|| render::auto_camera(mesh));
-            image = Some(render::render(mesh, &solutions, &camera, &look.render)?);
+            let emits = out.emitting_elements();
+            let img = render::render_scene(mesh, &solutions, &emits, &camera, &look.render)?;
+            image = Some(img);
         }
         if matches!(o.kind, OutputKind::Ply | OutputKind::Glb | OutputKind::Gltf)
             && vertices.is_none()

@@ -26,8 +26,8 @@ pub use crate::progress::{Progress, ProgressHandle};
 pub use crate::query::{query, PointEvaluator, PointValues, QueryError, QueryPoint, DEFAULT_SNAP};
 pub use crate::render::lightmap::{bake as bake_lightmap, Atlas, Resolution};
 pub use crate::render::{
-    input_vertex_mesh, render, tone_map, vertex_mesh, Corners, Image, RenderError, RenderOptions,
-    ToneMap, VertexMesh,
+    input_vertex_mesh, render, render_scene, tone_map, vertex_mesh, Corners, Image, RenderError,
+    RenderOptions, ToneMap, VertexMesh,
 };
 pub use crate::run::adapt::{solve_adaptive, AdaptOptions, AdaptOutcome, AdaptStep, StopReason};
 pub use crate::run::{

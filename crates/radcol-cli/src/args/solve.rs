@@ -168,7 +168,8 @@ other on a low-discrepancy set [default: {}]", RenderOptions::default().samples_
     #[arg(help_heading = "Image", long, value_name = "N")]
     pub samples: Option<u32>,
 
-    /// Exposure for 8-bit outputs: `auto` (the 99th luminance percentile maps to white),
+    /// Exposure for 8-bit outputs: `auto` (the 99th luminance percentile maps to white; in
+    /// images, of the pixels that show no emitter),
     /// `auto+S` / `auto-S` (auto, then S stops brighter/darker), or S stops applied to the
     /// radiance as is.
     #[arg(

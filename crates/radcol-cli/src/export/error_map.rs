@@ -96,6 +96,7 @@ mod tests {
             height: h,
             rgb,
             coverage: vec![1.0; (w * h) as usize],
+            emitted: Vec::new(),
         };
         let px = pixels(&img);
         assert_eq!(px[0], NOTHING);

@@ -54,6 +54,7 @@ mod tests {
             height: h,
             coverage: vec![1.0; rgb.len()],
             rgb: rgb.clone(),
+            emitted: Vec::new(),
         };
         let mut bytes = Cursor::new(Vec::new());
         write(&mut bytes, &image).unwrap();
@@ -84,6 +85,7 @@ mod tests {
             height: 2,
             rgb: vec![[0.0; 3]; 3],
             coverage: vec![],
+            emitted: vec![],
         };
         let err = write(Cursor::new(Vec::new()), &image).unwrap_err();
         assert!(err.to_string().contains("3 pixels"), "{err}");

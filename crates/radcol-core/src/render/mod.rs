@@ -129,6 +129,12 @@ pub struct Image {
     /// Fraction of each pixel's sub-samples that hit a surface (front or back),
     /// same layout as `rgb`; auto exposure looks only at covered pixels.
     pub coverage: Vec<f32>,
+    /// Fraction of each pixel's sub-samples that hit the front of an
+    /// element that emits, same layout as `rgb`, when the renderer was told
+    /// which do ([`render_scene`]); empty otherwise. Auto exposure then
+    /// looks only at covered pixels where no ray met an emitter: at the
+    /// light that surfaces reflect.
+    pub emitted: Vec<f32>,
 }
 
 /// Checks the channel count and that every solution lives on a mesh like `mesh`.
@@ -170,6 +176,37 @@ pub fn render(
     check_solutions(mesh, solutions)?;
     let bvh = ElementBvh::new(mesh, opts.curved_subdivisions);
     render_with(&bvh, mesh, solutions, camera, opts)
+}
+
+/// [`render`], told which elements emit (`emits`, one flag per element of
+/// `mesh`, such as [`crate::run::SolveOutcome::emitting_elements`]): the
+/// image records where rays met an emitter ([`Image::emitted`]), so that
+/// auto exposure ([`ToneMap`]) is set by the light the surfaces reflect, not
+/// by the lights themselves. A view in which the light covers more than
+/// 1 % of the pixels would otherwise be exposed for the light, and the
+/// room around it shown nearly black.
+pub fn render_scene(
+    mesh: &Mesh,
+    solutions: &[&Solution],
+    emits: &[bool],
+    camera: &Camera,
+    opts: &RenderOptions,
+) -> Result<Image, RenderError> {
+    check_solutions(mesh, solutions)?;
+    if emits.len() != mesh.len() {
+        return Err(RenderError::MeshMismatch {
+            channel: 0,
+            elements: emits.len(),
+            expected: mesh.len(),
+        });
+    }
+    let bvh = ElementBvh::new(mesh, opts.curved_subdivisions);
+    let mut image = render_with(&bvh, mesh, solutions, camera, opts)?;
+    let lights = trace(&bvh, camera, opts, &|hit: Option<&Hit>| {
+        Some([f64::from(u8::from(hit.is_some_and(|h| h.front && emits[h.element]))); 3])
+    })?;
+    image.emitted = lights.rgb.iter().map(|c| c[0]).collect();
+    Ok(image)
 }
 
 /// Renders with a prebuilt hierarchy (for several views of one mesh).
@@ -301,6 +338,7 @@ fn trace(
         height,
         rgb,
         coverage,
+        emitted: Vec::new(),
     })
 }
 

@@ -446,3 +446,49 @@ fn coverage_agrees_across_sample_counts() {
         }
     }
 }
+
+/// A room whose ceiling emits (u = 100) and whose other walls reflect
+/// (u = 1), seen from inside with the ceiling in a good part of the view.
+/// Exposed from every covered pixel, the walls show nearly black (the 99th
+/// percentile is the ceiling's); told which elements emit, auto exposure
+/// maps the walls' radiance to 1.0 before the curve, and a wall pixel
+/// shows ACES(1) in sRGB: 2.54 / 3.16 = 0.80380, encoded
+/// 1.055 · 0.80380^(1/2.4) − 0.055 = 0.90835, code 232.
+#[test]
+fn auto_exposure_follows_the_reflected_light() {
+    let mesh = room(1);
+    let ceiling = |p: DVec3| (p.z - L[2]).abs() < 1e-9;
+    let u = interpolate(&mesh, 0, |p| if ceiling(p) { 100.0 } else { 1.0 });
+    let emits: Vec<bool> = (0..mesh.len())
+        .map(|k| mesh.vertices(k).iter().all(|&v| ceiling(v)))
+        .collect();
+    assert_eq!(emits.iter().filter(|&&e| e).count(), 8);
+    let camera = Camera::parse("1,0.2,0.4, 1,2.8,1.3, 0,0,1, 70").unwrap();
+    let opts = RenderOptions {
+        width: 40,
+        height: 30,
+        samples_per_pixel: 4,
+        ..Default::default()
+    };
+    let tone = ToneMap::default();
+    let plain = render(&mesh, &[&u], &camera, &opts).unwrap();
+    let lit = render_scene(&mesh, &[&u], &emits, &camera, &opts).unwrap();
+    assert_eq!(plain.rgb, lit.rgb);
+    assert!(plain.emitted.is_empty());
+    let light_share = lit.emitted.iter().filter(|&&e| e == 1.0).count() as f64 / 1200.0;
+    assert!(light_share > 0.05, "the light covers {light_share}");
+    let walls: Vec<usize> = (0..1200)
+        .filter(|&i| lit.emitted[i] == 0.0 && lit.coverage[i] == 1.0)
+        .collect();
+    assert!(walls.len() > 600, "{}", walls.len());
+    let (dark, bright) = (tone_map(&plain, &tone), tone_map(&lit, &tone));
+    for &i in &walls {
+        assert!(dark[i][0] < 40, "exposed for the light: {:?}", dark[i]);
+        assert_eq!(bright[i], [232; 3], "pixel {i}");
+    }
+    let aces1: f64 = 2.54 / 3.16;
+    let code = (255.0 * (1.055 * aces1.powf(1.0 / 2.4) - 0.055)).round();
+    assert_eq!(code, 232.0);
+    // An emitter list of the wrong length is refused.
+    assert!(render_scene(&mesh, &[&u], &emits[1..], &camera, &opts).is_err());
+}

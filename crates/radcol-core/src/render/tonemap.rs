@@ -10,8 +10,12 @@
 //! 99th percentile (nearest rank) of the Rec. 709 luminance
 //! 0.2126 R + 0.7152 G + 0.0722 B over covered pixels (those whose rays hit a
 //! surface at least once), so that L99 maps to 1.0 before the operator and the
-//! brightest 1 % (light sources, usually) may saturate. When no covered pixel
-//! has positive luminance, a = 1. The background is scaled like everything else.
+//! brightest 1 % may saturate. An image that knows where its rays met
+//! emitters ([`super::Image::emitted`]) counts only the covered pixels where
+//! none did: the exposure follows the light that surfaces reflect, whatever
+//! share of the view the lights take (all covered pixels when every one
+//! meets a light). When no counted pixel has positive luminance, a = 1. The
+//! background is scaled like everything else.
 //! Negative and NaN inputs (undershoot of u_n) display as 0.
 
 /// The tone curve applied after exposure, per channel.
@@ -150,7 +154,16 @@ pub fn tone_map_values(
 /// Tone-maps a rendered image to 8-bit sRGB, row-major, top row first.
 pub fn tone_map(image: &super::Image, tm: &ToneMap) -> Vec<[u8; 3]> {
     let coverage = (image.coverage.len() == image.rgb.len()).then_some(&image.coverage[..]);
-    tone_map_values(&image.rgb, coverage, tm)
+    let reflected: Option<Vec<f32>> = coverage
+        .filter(|_| image.emitted.len() == image.rgb.len())
+        .map(|c| {
+            c.iter()
+                .zip(&image.emitted)
+                .map(|(&c, &e)| if e > 0.0 { 0.0 } else { c })
+                .collect()
+        })
+        .filter(|r: &Vec<f32>| r.iter().any(|&w| w > 0.0));
+    tone_map_values(&image.rgb, reflected.as_deref().or(coverage), tm)
 }
 
 #[cfg(test)]

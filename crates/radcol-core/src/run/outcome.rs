@@ -136,3 +136,18 @@ pub struct SolveOutcome {
     /// Timings.
     pub timings: Timings,
 }
+
+impl SolveOutcome {
+    /// Per element of the mesh: whether it emits (E > 0 at one of its nodes
+    /// in some channel). What [`crate::render::render_scene`] takes, so that
+    /// an image is exposed for the light the surfaces reflect.
+    pub fn emitting_elements(&self) -> Vec<bool> {
+        let disc = &self.discretization;
+        (0..disc.mesh().len())
+            .map(|k| {
+                let nodes = disc.range(k);
+                (self.channels.iter()).any(|c| c.emission[nodes.clone()].iter().any(|&e| e > 0.0))
+            })
+            .collect()
+    }
+}

@@ -195,6 +195,7 @@ pub fn bake(mesh: &Mesh, solutions: &[&Solution], atlas: &Atlas) -> Result<Image
             })
             .collect(),
         rgb,
+        emitted: Vec::new(),
     })
 }
 
