@@ -84,8 +84,8 @@ fn write(o: &Output, lm: &Baked, mesh: &Mesh, look: &Look) -> Result<String> {
     let mut f = create(&o.file)?;
     let what = match o.kind {
         OutputKind::LightmapExr => {
-            export::exr::write(f, &lm.image).with_context(|| format!("writing {shown}"))?;
-            return Ok(format!("{size}×{size} linear lightmap, {charts}"));
+            export::exr::write(&mut f, &lm.image).with_context(|| format!("writing {shown}"))?;
+            format!("{size}×{size} linear lightmap, {charts}")
         }
         OutputKind::LightmapPng => {
             f.write_all(&lm.png)?;
@@ -113,6 +113,6 @@ fn write(o: &Output, lm: &Baked, mesh: &Mesh, look: &Look) -> Result<String> {
         }
         _ => unreachable!("only lightmap outputs come here"),
     };
-    f.flush()?;
+    f.commit()?;
     Ok(what)
 }

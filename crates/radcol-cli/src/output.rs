@@ -2,7 +2,7 @@
 //! overwrite rule shared by every file.
 
 use crate::export;
-use crate::files::create;
+use crate::files::{create, Staged};
 use crate::lightmap;
 use crate::objects::layout;
 use crate::progress::Bar;
@@ -14,8 +14,7 @@ use radcol_core::mesh::Mesh;
 use radcol_core::render::{self, Image, VertexMesh};
 use radcol_core::run::SolveOutcome;
 use radcol_core::solution::Solution;
-use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::time::Instant;
 
 /// Writes every `--out` file, rendering the image and tessellating the
@@ -60,8 +59,13 @@ pub fn write_all(
             }
             let camera = look.camera.unwrap_or_else(|| render::auto_camera(mesh));
             let emits = out.emitting_elements();
-            let img = render::render_scene(mesh, &solutions, &emits, &camera, &look.render)?;
-            image = Some(img);
+            image = Some(render::render_scene(
+                mesh,
+                &solutions,
+                &emits,
+                &camera,
+                &look.render,
+            )?);
         }
         if matches!(o.kind, OutputKind::Ply | OutputKind::Glb | OutputKind::Gltf)
             && vertices.is_none()
@@ -75,14 +79,15 @@ pub fn write_all(
                 let pixels = render::tone_map(img, &look.tone);
                 let mut f = create(&o.file)?;
                 export::png::write(&mut f, img.width, img.height, &pixels)
-                    .and_then(|_| Ok(f.flush()?))
                     .with_context(|| format!("writing {path}"))?;
+                f.commit()?;
                 format!("{}×{} image", img.width, img.height)
             }
             OutputKind::Exr => {
                 let img = image.as_ref().expect("rendered above");
-                let f = create(&o.file)?;
-                export::exr::write(f, img).with_context(|| format!("writing {path}"))?;
+                let mut f = create(&o.file)?;
+                export::exr::write(&mut f, img).with_context(|| format!("writing {path}"))?;
+                f.commit()?;
                 format!("{}×{} linear radiance image", img.width, img.height)
             }
             OutputKind::ErrorMap | OutputKind::LightmapExr | OutputKind::LightmapPng => {
@@ -90,28 +95,7 @@ pub fn write_all(
             }
             OutputKind::Ply | OutputKind::Glb | OutputKind::Gltf => {
                 let vm = vertices.as_ref().expect("tessellated above");
-                let mut f = create(&o.file)?;
-                match o.kind {
-                    OutputKind::Ply => {
-                        // Per vertex of an element: its element's estimate
-                        // (a scene triangle spans many elements: none).
-                        let errors = element_estimates(out)
-                            .filter(|_| look.input_vertices.is_none())
-                            .map(|e| vertex_values(vm, &e));
-                        export::ply::write(&mut f, vm, &names, &look.tone, errors.as_deref())
-                    }
-                    OutputKind::Glb => {
-                        export::gltf::write_glb(&mut f, vm, &look.tone, &layout(mesh, look))
-                    }
-                    _ => export::gltf::write_gltf(&mut f, vm, &look.tone, &layout(mesh, look)),
-                }
-                .and_then(|_| Ok(f.flush()?))
-                .with_context(|| format!("writing {path}"))?;
-                format!(
-                    "{} vertices, {} triangles",
-                    vm.vertex_count(),
-                    vm.triangle_count()
-                )
+                write_vertices(o, vm, (look, out, &names))?
             }
         };
         written.push(Written {
@@ -121,6 +105,36 @@ pub fn write_all(
         });
     }
     Ok(written)
+}
+
+/// Writes the `.ply`/`.glb`/`.gltf` output `o` of the vertex mesh `vm`;
+/// returns what it holds.
+fn write_vertices(
+    o: &Output,
+    vm: &VertexMesh,
+    (look, out, names): (&Look, &SolveOutcome, &[&str]),
+) -> Result<String> {
+    let mesh = out.discretization.mesh();
+    let mut f = create(&o.file)?;
+    match o.kind {
+        OutputKind::Ply => {
+            // Per vertex of an element: its element's estimate (a scene
+            // triangle spans many elements: none).
+            let errors = element_estimates(out)
+                .filter(|_| look.input_vertices.is_none())
+                .map(|e| vertex_values(vm, &e));
+            export::ply::write(&mut f, vm, names, &look.tone, errors.as_deref())
+        }
+        OutputKind::Glb => export::gltf::write_glb(&mut f, vm, &look.tone, &layout(mesh, look)),
+        _ => export::gltf::write_gltf(&mut f, vm, &look.tone, &layout(mesh, look)),
+    }
+    .with_context(|| format!("writing {}", o.file.path.display()))?;
+    f.commit()?;
+    Ok(format!(
+        "{} vertices, {} triangles",
+        vm.vertex_count(),
+        vm.triangle_count()
+    ))
 }
 
 /// The vertex mesh of .ply/.glb/.gltf: on the elements, or on the scene's
@@ -148,8 +162,8 @@ fn write_error_map(o: &Output, look: &Look, out: &SolveOutcome, t: Instant) -> R
         img.height,
         &export::error_map::pixels(&img),
     )
-    .and_then(|_| Ok(f.flush()?))
     .with_context(|| format!("writing {path}"))?;
+    f.commit()?;
     let (lo, hi) = export::error_map::DECADES;
     Ok(Written {
         path,
@@ -212,7 +226,7 @@ pub fn element_estimates(out: &SolveOutcome) -> Option<Vec<f64>> {
 pub fn write_csv(file: &OutputFile, out: &SolveOutcome) -> Result<usize> {
     let mut w = create(file)?;
     let estimated = out.channels.iter().all(|c| c.estimate.is_some());
-    let write = |w: &mut BufWriter<File>| -> std::io::Result<usize> {
+    let write = |w: &mut Staged| -> std::io::Result<usize> {
         let mut columns = channel_columns(out);
         if estimated {
             columns.extend(estimate_columns(out));
@@ -233,8 +247,9 @@ pub fn write_csv(file: &OutputFile, out: &SolveOutcome) -> Result<usize> {
             }
             writeln!(w)?;
         }
-        w.flush()?;
         Ok(points.len())
     };
-    write(&mut w).with_context(|| format!("writing {}", file.path.display()))
+    let rows = write(&mut w).with_context(|| format!("writing {}", file.path.display()))?;
+    w.commit()?;
+    Ok(rows)
 }

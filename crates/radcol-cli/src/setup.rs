@@ -287,10 +287,18 @@ pub fn check_writable(file: &OutputFile) -> Result<(), crate::error::BadInput> {
     if path.is_dir() {
         return Err(bad_input(format!("{flag} {shown} is a directory")));
     }
-    if path.exists() && !file.force {
-        return Err(bad_input(format!(
-            "{flag} {shown} already exists; pass --force to overwrite it"
-        )));
+    if let Ok(meta) = std::fs::metadata(path) {
+        if !file.force {
+            return Err(bad_input(format!(
+                "{flag} {shown} already exists; pass --force to overwrite it"
+            )));
+        }
+        // A pipe or a device would block or take the file's place.
+        if !meta.is_file() {
+            return Err(bad_input(format!(
+                "{flag} {shown} is not a regular file; radcol replaces only files"
+            )));
+        }
     }
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
         if !parent.is_dir() {
@@ -300,19 +308,58 @@ pub fn check_writable(file: &OutputFile) -> Result<(), crate::error::BadInput> {
             )));
         }
     }
-    let probe = if path.exists() {
-        std::fs::OpenOptions::new().write(true).open(path).map(drop)
-    } else {
-        std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(path)
-            .and_then(|f| {
-                drop(f);
-                std::fs::remove_file(path)
-            })
-    };
-    probe.map_err(|e| bad_input(format!("{flag} {shown} cannot be written: {e}")))
+    // What the write will do: a file beside it, moved in place at the end.
+    let probe = crate::files::create(file).map(drop);
+    probe.map_err(|e| bad_input(format!("{flag} {shown} cannot be written: {e:#}")))
+}
+
+/// Where `path` leads: its canonical form, or its directory's with its
+/// name when it does not exist yet (two spellings of one file compare
+/// equal).
+pub fn identity(path: &std::path::Path) -> std::path::PathBuf {
+    if let Ok(p) = std::fs::canonicalize(path) {
+        return p;
+    }
+    let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
+    let dir = std::fs::canonicalize(parent.unwrap_or(std::path::Path::new(".")));
+    match (dir, path.file_name()) {
+        (Ok(d), Some(name)) => d.join(name),
+        _ => path.to_path_buf(),
+    }
+}
+
+/// Refuses outputs that are one of the run's `inputs` (flag and path) or
+/// that name one file twice, under any spelling: `--force` is permission
+/// to replace an earlier output, not what the run reads.
+pub fn check_distinct(
+    outputs: &[&OutputFile],
+    inputs: &[(&str, &std::path::Path)],
+) -> Result<(), crate::error::BadInput> {
+    let mut seen: Vec<(std::path::PathBuf, &OutputFile)> = Vec::new();
+    for o in outputs {
+        let id = identity(&o.path);
+        for (what, input) in inputs {
+            if identity(input) == id {
+                return Err(bad_input(format!(
+                    "{} {} is {what} ({}), which this run reads; write the output elsewhere",
+                    o.flag,
+                    o.path.display(),
+                    input.display()
+                )));
+            }
+        }
+        if let Some((_, first)) = seen.iter().find(|(p, _)| *p == id) {
+            return Err(bad_input(format!(
+                "{} {} and {} {} are one file",
+                first.flag,
+                first.path.display(),
+                o.flag,
+                o.path.display()
+            )));
+        }
+        seen.push((id, o));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -1052,3 +1052,124 @@ fn every_bad_or_extreme_input_has_its_outcome() {
         failures.join("\n")
     );
 }
+
+/// Outputs never take an input's place, nor leave a partial file: an
+/// output that is the scene being read or the `--at` file (under another
+/// spelling, with `--force`) is refused and the input kept byte for byte;
+/// one file named twice is refused; a pipe is refused, not opened (opening
+/// it waited for a reader); a replaced output leaves no temporary file
+/// beside it, and a symbolic link stays a link to the file it names.
+#[test]
+fn outputs_never_take_an_inputs_place() {
+    let dir = scratch("outputs");
+    let at = |c: Case, d: &Path| run(&c, d).map(|why| format!("{}: {why}", c.name));
+    let mut failed: Vec<String> = Vec::new();
+    let points = vec![("p.csv", b"x,y,z\n100,0,100\n".to_vec())];
+    let quick = ["solve", "cornell", "--max-edge", "300"];
+    fn with<'a>(quick: &[&'a str], extra: &[&'a str]) -> Vec<&'a str> {
+        quick.iter().chain(extra).copied().collect()
+    }
+    failed.extend(at(
+        case(
+            "a glb",
+            &with(&quick, &["-o", "{dir}/c.glb"]),
+            Says(&["wrote"]),
+        ),
+        &dir,
+    ));
+    let glb = std::fs::read(dir.join("c.glb")).expect("written");
+    failed.extend(at(
+        case(
+            "the scene as --out",
+            &[
+                "solve",
+                "{dir}/c.glb",
+                "--max-edge",
+                "300",
+                "-o",
+                "{dir}/./c.glb",
+                "--force",
+            ],
+            Refused(2, &["--out", "the scene", "reads"]),
+        ),
+        &dir,
+    ));
+    assert_eq!(
+        std::fs::read(dir.join("c.glb")).unwrap(),
+        glb,
+        "the scene kept"
+    );
+    failed.extend(at(
+        with_files(
+            case(
+                "--at-out on --at",
+                &with(
+                    &quick,
+                    &[
+                        "--at",
+                        "{dir}/p.csv",
+                        "--at-out",
+                        "{dir}/./p.csv",
+                        "--force",
+                    ],
+                ),
+                Refused(2, &["--at-out", "--at points file"]),
+            ),
+            points.clone(),
+        ),
+        &dir,
+    ));
+    assert_eq!(std::fs::read(dir.join("p.csv")).unwrap(), points[0].1);
+    failed.extend(at(
+        case(
+            "one file twice",
+            &with(
+                &quick,
+                &[
+                    "-o",
+                    "{dir}/a.csv",
+                    "-o",
+                    "{dir}/../outputs/a.csv",
+                    "--force",
+                ],
+            ),
+            Refused(2, &["one file"]),
+        ),
+        &dir,
+    ));
+    let fifo = dir.join("f.csv");
+    assert!(Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    failed.extend(at(
+        case(
+            "a pipe",
+            &with(&quick, &["-o", "{dir}/f.csv", "--force"]),
+            Refused(2, &["not a regular file"]),
+        ),
+        &dir,
+    ));
+    std::fs::write(dir.join("a.csv"), "old").unwrap();
+    std::os::unix::fs::symlink("a.csv", dir.join("link.csv")).unwrap();
+    failed.extend(at(
+        case(
+            "replaced through a link",
+            &with(&quick, &["-o", "{dir}/link.csv", "--force"]),
+            Says(&["wrote"]),
+        ),
+        &dir,
+    ));
+    assert!(failed.is_empty(), "{}", failed.join("\n"));
+    let link = std::fs::symlink_metadata(dir.join("link.csv")).unwrap();
+    assert!(link.file_type().is_symlink(), "the link stays a link");
+    let text = std::fs::read_to_string(dir.join("a.csv")).unwrap();
+    assert!(text.starts_with("element,node,"), "{text:.40}");
+    let left: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".tmp"))
+        .collect();
+    assert!(left.is_empty(), "temporary files left: {left:?}");
+}

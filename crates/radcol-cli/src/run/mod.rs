@@ -14,8 +14,9 @@ use crate::report::{
     self, AdaptLine, AdaptReport, ComparisonReport, DegreePart, Fastest, NodesReport, SolveReport,
     StudyFooter, StudyHeader, StudyLine, StudyReport,
 };
+use crate::scene::SceneSpec;
 use crate::setup::{self, check_writable, resolve_alpha};
-use crate::validate::{Config, NodesJob, SolveJob, StudyJob};
+use crate::validate::{Config, NodesJob, OutputFile, SolveJob, StudyJob};
 use crate::{output, plot, progress};
 use anyhow::{Context, Result};
 use radcol_core::nodes::NodeSet;
@@ -49,15 +50,19 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
     for o in &job.outputs {
         check_writable(&o.file)?;
     }
-    if let Some(file) = job.at.as_ref().and_then(|a| a.out.as_ref()) {
+    let at_out = job.at.as_ref().and_then(|a| a.out.as_ref());
+    if let Some(file) = at_out {
         check_writable(file)?;
-        if job.outputs.iter().any(|o| o.file.path == file.path) {
-            let shown = file.path.display();
-            return Err(
-                crate::error::bad_input(format!("--at-out {shown} is also an --out file")).into(),
-            );
-        }
     }
+    let mut inputs: Vec<(&str, &std::path::Path)> = Vec::new();
+    if let SceneSpec::Obj(p) | SceneSpec::Gltf(p) = &job.problem.scene {
+        inputs.push(("the scene", p));
+    }
+    if let Some(at) = &job.at {
+        inputs.push(("the --at points file", &at.source));
+    }
+    let files: Vec<&OutputFile> = job.outputs.iter().map(|o| &o.file).chain(at_out).collect();
+    setup::check_distinct(&files, &inputs)?;
     let mut s = setup::setup(&job.problem, job.level, job.max_edge, job.adapt.is_some())?;
     if let Some(at) = &job.at {
         points::precheck(at, &s)?;
@@ -283,8 +288,8 @@ fn run_comparison(job: StudyJob, w: &mut dyn Write) -> Result<()> {
 fn write_svg(file: &crate::validate::OutputFile, svg: &str) -> Result<String> {
     let mut f = crate::files::create(file)?;
     f.write_all(svg.as_bytes())
-        .and_then(|_| f.flush())
         .with_context(|| format!("writing {}", file.path.display()))?;
+    f.commit()?;
     Ok(file.path.display().to_string())
 }
 

@@ -97,8 +97,8 @@ pub fn evaluate(spec: &PointsSpec, s: &Setup, out: &SolveOutcome) -> Result<Poin
         Some(file) => {
             let mut f = create(file)?;
             write_csv(&mut f, &lines)
-                .and_then(|_| Ok(f.flush()?))
                 .with_context(|| format!("writing {}", file.path.display()))?;
+            f.commit()?;
             Some(file.path.display().to_string())
         }
         None => None,
