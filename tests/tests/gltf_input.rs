@@ -318,3 +318,103 @@ fn gltf_faults_name_the_file_and_the_mesh() {
     assert!(msg.contains("missing.glb"), "{msg}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Node hierarchies a hostile file may hold: a node its own child, two
+/// nodes in a loop and a node with two parents are refused naming the node
+/// (they overflowed the stack); a valid chain 20 000 nodes deep loads; a
+/// rotation that is not a unit quaternion is normalised with a warning (it
+/// scaled the mesh: ∫ over the triangle is its area 1/2 either way here,
+/// checked by the area of the placed triangle), and a zero one is refused.
+#[test]
+fn gltf_node_trees_from_hostile_files() {
+    let dir = scratch("nodes");
+    let bin: Vec<u8> = [[0f32, 0., 0.], [1., 0., 0.], [0., 1., 0.]]
+        .iter()
+        .flat_map(|p| p.iter().flat_map(|x| x.to_le_bytes()))
+        .collect();
+    std::fs::write(dir.join("t.bin"), &bin).unwrap();
+    let doc = |nodes: Value, roots: Value| {
+        json!({
+            "asset": {"version": "2.0"},
+            "scenes": [{"nodes": roots}],
+            "nodes": nodes,
+            "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1]}, "emissiveFactor": [1, 1, 1]}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}],
+            "buffers": [{"uri": "t.bin", "byteLength": bin.len()}],
+            "bufferViews": [{"buffer": 0, "byteLength": bin.len()}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}],
+        })
+    };
+    let path = dir.join("t.gltf");
+    let load = |d: Value| {
+        std::fs::write(&path, serde_json::to_vec(&d).unwrap()).unwrap();
+        load_gltf(&path)
+    };
+    let refused = [
+        (
+            "own child",
+            json!([{"mesh": 0, "children": [0]}]),
+            json!([0]),
+        ),
+        (
+            "a loop",
+            json!([{"mesh": 0, "children": [1]}, {"children": [0]}]),
+            json!([0]),
+        ),
+        (
+            "two parents",
+            json!([{"children": [2]}, {"children": [2]}, {"mesh": 0}]),
+            json!([0, 1]),
+        ),
+    ];
+    for (what, nodes, roots) in refused {
+        let msg = match load(doc(nodes, roots)) {
+            Ok(_) => panic!("{what}: loaded"),
+            Err(e) => e.to_string(),
+        };
+        assert!(
+            msg.contains("t.gltf") && msg.contains("reached twice"),
+            "{what}: {msg}"
+        );
+    }
+    let depth = 20_000;
+    let chain: Vec<Value> = (0..depth)
+        .map(|i| match i + 1 < depth {
+            true => json!({"children": [i + 1]}),
+            false => json!({"mesh": 0}),
+        })
+        .collect();
+    let scene = load(doc(Value::Array(chain), json!([0]))).expect("a deep chain loads");
+    assert_eq!(
+        scene
+            .surface
+            .patches
+            .iter()
+            .map(|p| p.triangles.len())
+            .sum::<usize>(),
+        1
+    );
+    let area = |s: &Scene| {
+        let t = s.surface.patches[0].triangles[0];
+        0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length()
+    };
+    // A quarter turn about z, written with length 2.
+    let turned = json!([{"mesh": 0, "rotation": [0, 0, std::f64::consts::SQRT_2, std::f64::consts::SQRT_2]}]);
+    let scene = load(doc(turned, json!([0]))).expect("normalised");
+    assert!((area(&scene) - 0.5).abs() < 1e-6, "area {}", area(&scene));
+    let warned = scene
+        .warnings
+        .iter()
+        .any(|w| w.contains("node 0") && w.contains("unit quaternion"));
+    assert!(warned, "{:?}", scene.warnings);
+    let zero = json!([{"mesh": 0, "rotation": [0, 0, 0, 0]}]);
+    let msg = load(doc(zero, json!([0])))
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        msg.contains("node 0") && msg.contains("not a rotation"),
+        "{msg}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

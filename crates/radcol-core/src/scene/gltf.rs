@@ -94,9 +94,7 @@ fn build(
         camera: None,
         warnings: Vec::new(),
     };
-    for node in root.nodes() {
-        walk.node(&node, DMat4::IDENTITY)?;
-    }
+    walk.nodes(root.nodes(), doc.nodes().len())?;
     if let Some(c) = walk.camera {
         walk.builder.camera(c);
     }
@@ -106,10 +104,76 @@ fn build(
 }
 
 impl Walk<'_> {
-    /// Places `node` and its children under the parent transform `parent`.
-    fn node(&mut self, node: &gltf::Node, parent: DMat4) -> Result<(), SceneError> {
-        let local = Mat4::from_cols_array_2d(&node.transform().matrix()).as_dmat4();
-        let world = parent * local;
+    /// Places the trees under `roots` (of a document with `count` nodes),
+    /// depth first without recursion (a chain of nodes may be as deep as
+    /// the file is long). glTF's nodes form disjoint trees: a node reached
+    /// twice (a loop, or two parents) is refused, naming it.
+    fn nodes<'a>(
+        &mut self,
+        roots: impl Iterator<Item = gltf::Node<'a>>,
+        count: usize,
+    ) -> Result<(), SceneError> {
+        let mut seen = vec![false; count];
+        let mut stack: Vec<(gltf::Node<'a>, DMat4)> = roots.map(|n| (n, DMat4::IDENTITY)).collect();
+        stack.reverse();
+        while let Some((node, parent)) = stack.pop() {
+            let i = node.index();
+            if std::mem::replace(&mut seen[i], true) {
+                return Err(SceneError::Syntax {
+                    at: self.file.to_string(),
+                    message: format!(
+                        "node {i} is reached twice (a node that is its own ancestor, or has two parents): glTF's nodes form trees"
+                    ),
+                });
+            }
+            let world = parent * self.local(&node)?;
+            self.node(&node, world)?;
+            let children: Vec<_> = node.children().collect();
+            stack.extend(children.into_iter().rev().map(|c| (c, world)));
+        }
+        Ok(())
+    }
+
+    /// `node`'s own transform. A rotation that is not a unit quaternion
+    /// (glTF 2.0, 5.25: it must be) would scale as well as turn: it is
+    /// normalised, with a warning naming the node; a zero or non-finite one
+    /// is refused.
+    fn local(&mut self, node: &gltf::Node) -> Result<DMat4, SceneError> {
+        let gltf::scene::Transform::Decomposed {
+            translation,
+            rotation,
+            scale,
+        } = node.transform()
+        else {
+            return Ok(Mat4::from_cols_array_2d(&node.transform().matrix()).as_dmat4());
+        };
+        let q = glam::DQuat::from_array(rotation.map(f64::from));
+        let norm = q.length();
+        if !(norm.is_finite() && norm > 0.0) {
+            return Err(SceneError::Syntax {
+                at: self.file.to_string(),
+                message: format!(
+                    "node {}: rotation {rotation:?} is not a rotation (glTF asks for a unit quaternion)",
+                    node.index()
+                ),
+            });
+        }
+        if (norm - 1.0).abs() > 1e-6 {
+            self.warnings.push(format!(
+                "{}: node {}: rotation {rotation:?} has length {norm:.6}, not 1 (glTF asks for a unit quaternion); normalised, so that it turns without scaling",
+                self.file,
+                node.index()
+            ));
+        }
+        Ok(DMat4::from_scale_rotation_translation(
+            DVec3::from_array(scale.map(f64::from)),
+            q / norm,
+            DVec3::from_array(translation.map(f64::from)),
+        ))
+    }
+
+    /// Places `node`'s mesh and camera by its world transform `world`.
+    fn node(&mut self, node: &gltf::Node, world: DMat4) -> Result<(), SceneError> {
         let label = node
             .name()
             .map(str::to_string)
@@ -128,9 +192,6 @@ impl Walk<'_> {
         }
         if let (None, Some(cam)) = (self.camera, node.camera()) {
             self.camera = camera(&cam, world, &label, &mut self.warnings);
-        }
-        for child in node.children() {
-            self.node(&child, world)?;
         }
         Ok(())
     }
