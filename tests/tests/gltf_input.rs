@@ -418,3 +418,64 @@ fn gltf_node_trees_from_hostile_files() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Buffers a hostile file may name: outside the scene's directory, a
+/// device, a name that percent-decodes to bytes that are not UTF-8, a file
+/// shorter than its byteLength — each refused naming the buffer (they were
+/// read as the buffer, read forever, or panicked) — and a 16 GiB file
+/// (sparse) of which the buffer is the first 36 bytes: no more is read
+/// (reading it whole asked for 16 GiB).
+#[test]
+fn gltf_buffers_from_hostile_files() {
+    let dir = scratch("buffers");
+    let bin: Vec<u8> = [[0f32, 0., 0.], [1., 0., 0.], [0., 1., 0.]]
+        .iter()
+        .flat_map(|p| p.iter().flat_map(|x| x.to_le_bytes()))
+        .collect();
+    let path = dir.join("t.gltf");
+    let load = |uri: &str, length: usize| {
+        let doc = json!({
+            "asset": {"version": "2.0"},
+            "scenes": [{"nodes": [0]}],
+            "nodes": [{"mesh": 0}],
+            "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1]}, "emissiveFactor": [1, 1, 1]}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}],
+            "buffers": [{"uri": uri, "byteLength": length}],
+            "bufferViews": [{"buffer": 0, "byteLength": 36}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}],
+        });
+        std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+        load_gltf(&path).map_err(|e| e.to_string())
+    };
+    let refused = |uri: &str, length: usize, needles: &[&str]| {
+        let msg = load(uri, length)
+            .err()
+            .unwrap_or_else(|| panic!("{uri}: loaded"));
+        for n in needles {
+            assert!(msg.contains(n) && msg.contains("buffer 0"), "{uri}: {msg}");
+        }
+    };
+    refused(
+        "../../../../../../etc/passwd",
+        36,
+        &["outside the scene's directory"],
+    );
+    refused("file:///dev/zero", 36, &["outside the scene's directory"]);
+    std::os::unix::fs::symlink("/dev/zero", dir.join("zero.bin")).unwrap();
+    refused("zero.bin", 36, &["outside the scene's directory"]);
+    refused("%FF%FE.bin", 36, &["does not decode to UTF-8"]);
+    std::fs::write(dir.join("short.bin"), &bin[..20]).unwrap();
+    refused("short.bin", 36, &["20 bytes", "byteLength says 36"]);
+    let big = std::fs::File::create(dir.join("big.bin")).unwrap();
+    big.set_len(1 << 34).unwrap();
+    drop(big);
+    std::fs::OpenOptions::new()
+        .write(true)
+        .open(dir.join("big.bin"))
+        .and_then(|mut f| std::io::Write::write_all(&mut f, &bin))
+        .unwrap();
+    load("big.bin", 36).expect("the first 36 bytes are the buffer");
+    std::fs::write(dir.join("t.bin"), &bin).unwrap();
+    load("t.bin", 36).expect("a plain buffer");
+    let _ = std::fs::remove_dir_all(&dir);
+}
