@@ -38,6 +38,9 @@ use clap::Parser;
 use std::io::Write;
 use std::process::ExitCode;
 
+/// `--threads` at most this many per logical CPU.
+const MAX_THREADS_PER_CPU: usize = 8;
+
 fn main() -> ExitCode {
     ensure_runtime_dir();
     // A panic is a bug, but the user still gets one line and an exit code
@@ -102,6 +105,16 @@ fn try_main() -> anyhow::Result<()> {
     progress::set_quiet(cli.quiet);
     progress::set_verbose(cli.verbose);
     if let Some(n) = cli.threads {
+        // Each thread holds its own row blocks and stack: tens of thousands
+        // spent minutes starting and switching, for no speed.
+        let cpus = std::thread::available_parallelism().map_or(1, |c| c.get());
+        let most = MAX_THREADS_PER_CPU * cpus;
+        if usize::from(n) > most {
+            return Err(error::bad_input(format!(
+                "--threads {n}: at most {most} ({MAX_THREADS_PER_CPU} per logical CPU; this machine has {cpus})"
+            ))
+            .into());
+        }
         // Before any parallel work: the global pool is built once.
         rayon::ThreadPoolBuilder::new()
             .num_threads(n.into())

@@ -708,7 +708,7 @@ fn target_error_refines_adaptively() {
         assert_one_line_error(
             &["solve", "sphere", "--target-error", bad],
             2,
-            &["--target-error", "(0, 1)"],
+            &["--target-error", "[1e-8, 1)"],
         );
     }
     assert_one_line_error(
@@ -1288,7 +1288,7 @@ fn study_compares_degrees_and_names_the_fastest_per_decade() {
                 "--exact",
                 "1",
             ],
-            vec!["--adaptive", "(0, 1)"],
+            vec!["--adaptive", "[1e-8, 1)"],
         ),
     ] {
         assert_one_line_error(&args, 2, &needles);

@@ -569,7 +569,29 @@ fn flag_cases() -> Vec<Case> {
         case(
             "--target-error 0",
             &["solve", "sphere", "--target-error", "0"],
-            Refused(2, &["--target-error", "(0, 1)"]),
+            Refused(2, &["--target-error", "[1e-8, 1)"]),
+        ),
+        case(
+            "--target-error 1e-300",
+            &["solve", "sphere", "--target-error", "1e-300"],
+            Refused(2, &["--target-error 1e-300", "[1e-8, 1)"]),
+        ),
+        case(
+            "study --adaptive 1e-300",
+            &[
+                "study",
+                "sphere",
+                "--levels",
+                "0..1",
+                "--adaptive",
+                "1e-300",
+            ],
+            Refused(2, &["--adaptive 1e-300", "[1e-8, 1)"]),
+        ),
+        case(
+            "--threads 65535",
+            &["--threads", "65535", "solve", "sphere", "--level", "0"],
+            Refused(2, &["--threads 65535", "per logical CPU"]),
         ),
         case(
             "--target-error 2",

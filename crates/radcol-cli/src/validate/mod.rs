@@ -26,7 +26,7 @@ use radcol_core::hmatrix::HOptions;
 use radcol_core::mesh::grading::Grade;
 use radcol_core::nodes::check_degree;
 use radcol_core::problem::Field;
-use radcol_core::run::adapt::AdaptOptions;
+use radcol_core::run::adapt::{AdaptOptions, MIN_TARGET};
 use radcol_core::run::{OperatorChoice, SolveConfig, SolverKind};
 use radcol_core::solve::GmresParams;
 use std::ops::RangeInclusive;
@@ -271,9 +271,9 @@ fn adapt(
     (max_unknowns, max_steps, hp): (Option<u64>, Option<usize>, bool),
     p: &ProblemSpec,
 ) -> Result<AdaptOptions, BadInput> {
-    if !(target > 0.0 && target < 1.0) {
+    if !(target >= MIN_TARGET && target < 1.0) {
         return Err(bad_input(format!(
-            "--target-error {target}: the target (max error relative to max |u|) must lie in (0, 1)"
+            "--target-error {target:e}: the target (max error relative to max |u|) must lie in [{MIN_TARGET:e}, 1): the error estimate's integrals are accurate to 1e-9"
         )));
     }
     if max_unknowns == Some(0) {
@@ -329,9 +329,9 @@ fn study_job(a: StudyArgs) -> Result<StudyJob> {
         .into());
     }
     if let Some(t) = a.adaptive {
-        if !(t > 0.0 && t < 1.0) {
+        if !(t >= MIN_TARGET && t < 1.0) {
             return Err(bad_input(format!(
-                "--adaptive {t}: the target (max error relative to max |u|) must lie in (0, 1)"
+                "--adaptive {t:e}: the target (max error relative to max |u|) must lie in [{MIN_TARGET:e}, 1): the error estimate's integrals are accurate to 1e-9"
             ))
             .into());
         }

@@ -263,6 +263,20 @@ pub(super) fn look(a: &SolveArgs) -> Result<LookSpec, BadInput> {
             a.width, a.height
         )));
     }
+    // Per pixel: linear RGB, coverage and emitters (f32 each), the 8-bit
+    // image and the encoder's row: about 32 bytes. Refused before the solve,
+    // not after it.
+    let image_bytes = 32.0 * a.width as f64 * a.height as f64;
+    let budget = radcol_core::run::MemoryBudget::now();
+    if !budget.fits(image_bytes) {
+        return Err(bad_input(format!(
+            "--width {} --height {}: the image would take {:.1} GB, more than the {:.1} GB of memory available",
+            a.width,
+            a.height,
+            image_bytes / 1e9,
+            budget.usable() / 1e9
+        )));
+    }
     if let Some(t) = a.tessellation.filter(|t| !(1..=64).contains(t)) {
         return Err(bad_input(format!("--tessellation {t}: must lie in 1..=64")));
     }

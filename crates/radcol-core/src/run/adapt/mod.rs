@@ -28,7 +28,8 @@ mod options;
 
 pub use history::{singular_points, SingularPoint, STALL_RATIO};
 pub use options::{
-    AdaptOptions, ESTIMATE_WITHIN, MARK_FRACTION, MAX_FRACTION, MIN_SIZE, STALL_GENERATIONS,
+    AdaptOptions, ESTIMATE_WITHIN, MARK_FRACTION, MAX_FRACTION, MIN_SIZE, MIN_TARGET,
+    STALL_GENERATIONS,
 };
 
 use super::pipeline::{solve_step, PerElement, Plans, Previous};

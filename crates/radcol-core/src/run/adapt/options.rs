@@ -66,6 +66,12 @@ pub struct AdaptOptions {
     pub graded_start: bool,
 }
 
+/// The smallest target accepted: the estimate's integrals are accurate to
+/// [`crate::estimate::ESTIMATE_QUAD_TOL`] of a row (1e-9), so an error
+/// below ten times that could not be told from quadrature error, and a
+/// loop asked for it refined until memory ran out.
+pub const MIN_TARGET: f64 = 1e-8;
+
 /// The default [`AdaptOptions::mark_fraction`]. At 0.5, with an estimate
 /// that follows the error closely (on the shadow family 0.86–1.79 per
 /// element, 0.91–1.02 overall at r = 1), the last step split every element in (TOL/2, TOL] and
@@ -107,9 +113,9 @@ impl Default for AdaptOptions {
 }
 
 impl AdaptOptions {
-    /// Refuses a target outside (0, 1) and a size floor outside [0, 1).
+    /// Refuses a target outside [[`MIN_TARGET`], 1) and a size floor outside [0, 1).
     pub fn check(&self) -> Result<(), InputError> {
-        if !(self.target > 0.0 && self.target < 1.0) {
+        if !(self.target >= MIN_TARGET && self.target < 1.0) {
             return Err(InputError::TargetError { value: self.target });
         }
         if !(self.min_size >= 0.0 && self.min_size < 1.0) {

@@ -69,12 +69,12 @@ fn a_stalling_element_does_not_set_the_threshold_alone() {
     assert_eq!(marked(&|_| true, &|_| false), vec![0]);
 }
 
-/// Targets outside (0, 1) and size floors outside [0, 1) are refused.
+/// Targets outside [MIN_TARGET, 1) and size floors outside [0, 1) are refused.
 #[test]
 fn options_out_of_range_are_refused() {
     let ok = AdaptOptions::default();
     assert!(ok.check().is_ok());
-    for target in [0.0, 1.0, -1e-3, f64::NAN] {
+    for target in [0.0, 1e-300, 0.5 * MIN_TARGET, 1.0, -1e-3, f64::NAN] {
         let o = AdaptOptions {
             target,
             ..ok.clone()
