@@ -271,7 +271,7 @@ fn adapt(
     (max_unknowns, max_steps, hp): (Option<u64>, Option<usize>, bool),
     p: &ProblemSpec,
 ) -> Result<AdaptOptions, BadInput> {
-    if !(target >= MIN_TARGET && target < 1.0) {
+    if !(MIN_TARGET..1.0).contains(&target) {
         return Err(bad_input(format!(
             "--target-error {target:e}: the target (max error relative to max |u|) must lie in [{MIN_TARGET:e}, 1): the error estimate's integrals are accurate to 1e-9"
         )));
@@ -329,7 +329,7 @@ fn study_job(a: StudyArgs) -> Result<StudyJob> {
         .into());
     }
     if let Some(t) = a.adaptive {
-        if !(t >= MIN_TARGET && t < 1.0) {
+        if !(MIN_TARGET..1.0).contains(&t) {
             return Err(bad_input(format!(
                 "--adaptive {t:e}: the target (max error relative to max |u|) must lie in [{MIN_TARGET:e}, 1): the error estimate's integrals are accurate to 1e-9"
             ))
