@@ -70,8 +70,13 @@ fn check(surface: Arc<Surface>, level: u32, degree: usize, what: &str) {
             check_nodes(degree, nodes.alpha()),
         ))
     };
-    let mut check =
-        AssemblyPlan::at_points(disc.clone(), check_rows(&disc), quad.clone(), &vis, None);
+    let mut check = AssemblyPlan::at_points(
+        disc.clone(),
+        check_rows(&disc),
+        quad.clone(),
+        &vis,
+        (None, None),
+    );
     for step in 0..2 {
         // Every third element (shifted per step) split.
         let (refined, _, _, unchanged) = split_every(&mesh, step, 3);
@@ -122,10 +127,15 @@ fn check(surface: Arc<Surface>, level: u32, degree: usize, what: &str) {
             check_rows(&disc),
             quad.clone(),
             &vis,
-            Some((&check, unchanged.clone())),
+            (Some((&check, unchanged.clone())), None),
         );
-        let check_fresh =
-            AssemblyPlan::at_points(disc.clone(), check_rows(&disc), quad.clone(), &vis, None);
+        let check_fresh = AssemblyPlan::at_points(
+            disc.clone(),
+            check_rows(&disc),
+            quad.clone(),
+            &vis,
+            (None, None),
+        );
         assert_eq!(
             check_updated.classes(),
             check_fresh.classes(),
@@ -148,6 +158,20 @@ fn check(surface: Arc<Surface>, level: u32, degree: usize, what: &str) {
         assert!(
             a[0].elements == b[0].elements && a[0].max == b[0].max && a[0].l2 == b[0].l2,
             "{what} step {step}: estimates differ"
+        );
+        // Taking the square plan's candidate lists changes nothing either.
+        let rows = check_rows(&disc);
+        let known = (None, Some(&updated));
+        let check_known = AssemblyPlan::at_points(disc.clone(), rows, quad.clone(), &vis, known);
+        assert_eq!(
+            check_known.classes(),
+            check_fresh.classes(),
+            "{what} step {step}: check classes with the square plan's candidates"
+        );
+        let c = estimate(&check_known, &fields);
+        assert!(
+            a[0].elements == c[0].elements && a[0].max == c[0].max && a[0].l2 == c[0].l2,
+            "{what} step {step}: estimates with the square plan's candidates differ"
         );
         mesh = refined;
         plan = updated;
@@ -248,8 +272,13 @@ fn check_update(surface: Arc<Surface>, level: u32, degree: usize, what: &str) {
             check_nodes(degree, nodes.alpha()),
         ))
     };
-    let old_check =
-        AssemblyPlan::at_points(disc.clone(), check_rows(&disc), quad.clone(), &vis, None);
+    let old_check = AssemblyPlan::at_points(
+        disc.clone(),
+        check_rows(&disc),
+        quad.clone(),
+        &vis,
+        (None, None),
+    );
     let wave = |p: glam::DVec3| 1.0 + 0.5 * (p.x + 2.0 * p.y).sin() + 0.2 * p.z;
     let u_old = Solution::new(
         disc.clone(),
@@ -282,9 +311,15 @@ fn check_update(surface: Arc<Surface>, level: u32, degree: usize, what: &str) {
         check_rows(&disc),
         quad.clone(),
         &vis,
-        Some((&old_check, unchanged.clone())),
+        (Some((&old_check, unchanged.clone())), None),
     );
-    let fresh = AssemblyPlan::at_points(disc.clone(), check_rows(&disc), quad.clone(), &vis, None);
+    let fresh = AssemblyPlan::at_points(
+        disc.clone(),
+        check_rows(&disc),
+        quad.clone(),
+        &vis,
+        (None, None),
+    );
     let scale = u_old.nodal().iter().fold(0.0f64, |m, u| m.max(u.abs()));
     // Δ: 1e-2 on new elements, `small` on unchanged ones (varying by node).
     let change_of = |small: f64| -> Vec<f64> {

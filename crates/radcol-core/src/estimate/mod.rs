@@ -426,7 +426,7 @@ mod tests {
         let rho = vec![0.0; check.len()];
         let visibility = crate::visibility::analyze(mesh.surface());
         let quad = QuadratureOptions::default();
-        let plan = AssemblyPlan::at_points(disc.clone(), check, quad, &visibility, None);
+        let plan = AssemblyPlan::at_points(disc.clone(), check, quad, &visibility, (None, None));
         let fields = ChannelFields {
             solution: &solution,
             rho: &rho,

@@ -190,7 +190,7 @@ fn settle(
 fn estimate_channels(
     problem: &Problem,
     cfg: &SolveConfig,
-    (visibility, assembly_bound): (&VisibilityAnalysis, f64),
+    (visibility, square): (&VisibilityAnalysis, &AssemblyPlan),
     channels: &mut [ChannelResult],
     previous: Option<&Previous<'_>>,
     guess: Option<&[Vec<f64>]>,
@@ -213,7 +213,8 @@ fn estimate_channels(
         ..cfg.quad.clone()
     };
     let reuse = previous.and_then(|p| p.plans.check.as_ref().map(|c| (c, p.unchanged.clone())));
-    let plan = AssemblyPlan::at_points(disc.clone(), check, quad, visibility, reuse);
+    let plan =
+        AssemblyPlan::at_points(disc.clone(), check, quad, visibility, (reuse, Some(square)));
     let inputs: Vec<ChannelFields<'_>> = channels
         .iter()
         .zip(&check_fields)
@@ -230,7 +231,7 @@ fn estimate_channels(
     let estimates = updated.unwrap_or_else(|| estimate(&plan, &inputs));
     // Approximate visibility: the most the residual at a node or check
     // point can have moved, per unit of ρ max|u| (0 when exact).
-    let mass = assembly_bound.max(plan.stats().visibility_bound);
+    let mass = (square.stats().visibility_bound).max(plan.stats().visibility_bound);
     for ((ch, mut e), (rho, _)) in channels.iter_mut().zip(estimates).zip(&check_fields) {
         let rho_max = ch.rho.iter().chain(rho).copied().fold(0.0, f64::max);
         e.add_visibility_bound(rho_max, mass);
@@ -391,7 +392,7 @@ impl Stages<'_> {
             estimate_channels(
                 problem,
                 cfg,
-                (&visibility, built.plan.stats().visibility_bound),
+                (&visibility, &built.plan),
                 &mut channels,
                 self.previous,
                 self.guess,

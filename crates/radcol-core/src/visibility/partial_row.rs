@@ -131,6 +131,13 @@ impl PartialRow {
         self.candidates.extend_from_slice(cands);
     }
 
+    /// The candidates of the pair with element `k`, when it is listed.
+    pub(crate) fn get(&self, k: usize) -> Option<&[u32]> {
+        let i = self.elements.binary_search(&(k as u32)).ok()?;
+        let (start, len) = self.ranges[i];
+        Some(&self.candidates[start as usize..(start + len) as usize])
+    }
+
     pub(crate) fn candidates_of(&self, k: usize) -> &[u32] {
         let i = self
             .elements

@@ -22,20 +22,26 @@ pub(crate) struct Seen {
     pub(crate) hidden: Vec<u32>,
 }
 
+/// Appends to `out` the candidate occluders of the pair (A, element k) and
+/// returns true, when another plan of the same mesh found them already
+/// (false: not known, nothing appended).
+pub(crate) type Known<'a> = &'a dyn Fn(usize, &mut Vec<u32>) -> bool;
+
 /// What flat element `a` (the row block's, with row points `rows`:
 /// position and unit normal) sees: every element `k` with `live[k]` (not
 /// culled, not the block's own, flat) that some occluder may hide from
 /// `a`, or that straddles `a`'s plane, is partly visible with its candidate
 /// occluders, unless the occluders hide it from every row point (its
 /// clipped visible region is empty from each). `flat_geom[k]` is element
-/// k's plane.
+/// k's plane. An element whose candidates `known` gives is not searched
+/// for them: they depend on the two elements alone, not on the row points.
 pub(crate) fn partial_pairs(
     occ: &Occluders,
     tree: &RefinementTree,
     a: Plane,
     rows: &[(DVec3, DVec3)],
     flat_geom: &[Plane],
-    live: &[bool],
+    (live, known): (&[bool], Option<Known<'_>>),
     bounce: Option<Bounce<'_>>,
 ) -> Seen {
     let walk = Walk {
@@ -44,6 +50,7 @@ pub(crate) fn partial_pairs(
         rows,
         tree,
         live,
+        known,
         flat_geom,
         front: RefCell::new(Vec::new()),
         bounce,
@@ -196,6 +203,7 @@ struct Walk<'a> {
     rows: &'a [(DVec3, DVec3)],
     tree: &'a RefinementTree,
     live: &'a [bool],
+    known: Option<Known<'a>>,
     flat_geom: &'a [Plane],
     /// Per closed component met so far: whether A's segments start in its
     /// front region ([`super::sealed::Sealed::starts_in_front`]).
@@ -313,7 +321,9 @@ impl Walk<'_> {
         if node.end - node.start == 1 {
             // The node is the element itself.
             let k = node.start;
-            self.candidates(self.flat_geom[k], among, &mut cands);
+            if !self.known.is_some_and(|known| known(k, &mut cands)) {
+                self.candidates(self.flat_geom[k], among, &mut cands);
+            }
             self.mark(k, &cands, seen);
             return;
         }

@@ -11,7 +11,7 @@ use crate::discretization::Discretization;
 use crate::mesh::Mesh;
 use crate::progress::ProgressHandle;
 use crate::visibility::bounce::Bounce;
-use crate::visibility::walk::{partial_pairs, PartialRow, Plane, RefinementTree};
+use crate::visibility::walk::{partial_pairs, Known, PartialRow, Plane, RefinementTree};
 use crate::visibility::{Occluders, VisibilityAnalysis};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -182,7 +182,7 @@ pub(super) fn classify_all(
     (tol, bounce): (f64, Option<Bounce<'_>>),
     occluders: Option<&Occluders>,
     progress: &Option<ProgressHandle>,
-    prev: Option<(&AssemblyPlan, &Unchanged)>,
+    (prev, known): (Option<(&AssemblyPlan, &Unchanged)>, Option<&AssemblyPlan>),
     only: Option<&[bool]>,
 ) -> (ClassTable, Vec<PartialRow>, Vec<f32>) {
     let mesh = disc.mesh();
@@ -231,7 +231,24 @@ pub(super) fn classify_all(
                     shapes: &shapes,
                     bounce,
                 };
-                partial = walk.row(kp, block, &mut row, &reused, kept);
+                // The square plan's classes of this row tell which pairs it
+                // searched: partly visible ones hold their candidates, far
+                // and near ones have none; the rest (culled) are searched.
+                let known_row = known.map(|p| (p.classes.row(kp, 0..n), &p.partial[kp]));
+                let lookup = |k: usize, out: &mut Vec<u32>| -> bool {
+                    let Some((classes, partial)) = known_row.as_ref() else {
+                        return false;
+                    };
+                    match PairClass::from_code(classes[k]) {
+                        PairClass::Partial => {
+                            partial.get(k).map(|c| out.extend_from_slice(c)).is_some()
+                        }
+                        PairClass::Far(_) | PairClass::Near => true,
+                        _ => false,
+                    }
+                };
+                let known = known.is_some().then_some(&lookup as Known<'_>);
+                partial = walk.row(kp, block, &mut row, (&reused, known), kept);
             }
             if let Some(p) = progress {
                 p.advance(1);
@@ -273,7 +290,7 @@ impl Occluded<'_> {
         kp: usize,
         block: &[CollocationPoint],
         row: &mut [u8],
-        reused: &dyn Fn(usize) -> bool,
+        (reused, known): (&dyn Fn(usize) -> bool, Option<Known<'_>>),
         kept: Option<PartialRow>,
     ) -> PartialRow {
         let shapes = self.shapes;
@@ -294,7 +311,15 @@ impl Occluded<'_> {
             ..b
         });
         let (planes, tree) = (&shapes.planes, self.tree);
-        let seen = partial_pairs(self.occ, tree, planes[kp], &at, planes, &live, bounce);
+        let seen = partial_pairs(
+            self.occ,
+            tree,
+            planes[kp],
+            &at,
+            planes,
+            (&live, known),
+            bounce,
+        );
         // Pairs hidden from every row point are culled: their entries are
         // zero, and as partial pairs they were clipped at every fill and
         // made every block of a shadow look rough to the compressed

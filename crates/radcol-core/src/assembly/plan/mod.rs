@@ -130,7 +130,7 @@ impl AssemblyPlan {
         visibility: &VisibilityAnalysis,
         progress: Option<ProgressHandle>,
     ) -> Self {
-        Self::build(disc, None, opts, visibility, progress, None, None)
+        Self::build(disc, None, opts, visibility, progress, (None, None), None)
     }
 
     /// The plan of the rectangular matrix whose rows are the points of
@@ -142,12 +142,20 @@ impl AssemblyPlan {
     /// [`AssemblyPlan::updating`]. Such a plan is executed with
     /// [`AssemblyPlan::fill_block`] (row blocks of `rows`' points per
     /// element); backends assemble square plans only.
+    ///
+    /// `square`: the plan of `disc`'s own nodes, when there is one; the
+    /// candidate occluders of a pair depend on its two elements alone, so
+    /// the pairs it searched are not searched again (on the bunny room the
+    /// search was half of the check points' plan).
     pub fn at_points(
         disc: Arc<Discretization>,
         rows: Arc<Discretization>,
         opts: QuadratureOptions,
         visibility: &VisibilityAnalysis,
-        previous: Option<(&AssemblyPlan, Arc<Unchanged>)>,
+        (previous, square): (
+            Option<(&AssemblyPlan, Arc<Unchanged>)>,
+            Option<&AssemblyPlan>,
+        ),
     ) -> Self {
         assert!(
             Arc::ptr_eq(disc.mesh(), rows.mesh()),
@@ -159,7 +167,21 @@ impl AssemblyPlan {
                 .is_some_and(|r| same_nodes_where_unchanged(r, &rows, u))
                 && p.reusable_by(&disc, &opts, visibility, u)
         });
-        Self::build(disc, Some(rows), opts, visibility, None, prev, None)
+        let square = square.filter(|s| {
+            s.rows.is_none()
+                && Arc::ptr_eq(s.disc.mesh(), disc.mesh())
+                && s.visibility.needed == visibility.needed
+                && s.opts.visibility_budget == opts.visibility_budget
+        });
+        Self::build(
+            disc,
+            Some(rows),
+            opts,
+            visibility,
+            None,
+            (prev, square),
+            None,
+        )
     }
 
     /// Whether a plan for `disc` may take this plan's pairs of `unchanged` elements.
@@ -193,7 +215,7 @@ impl AssemblyPlan {
         let same =
             previous.rows.is_none() && previous.reusable_by(&disc, &opts, visibility, &unchanged);
         let prev = same.then_some((previous, unchanged));
-        Self::build(disc, None, opts, visibility, progress, prev, None)
+        Self::build(disc, None, opts, visibility, progress, (prev, None), None)
     }
 
     fn build(
@@ -202,7 +224,10 @@ impl AssemblyPlan {
         opts: QuadratureOptions,
         visibility: &VisibilityAnalysis,
         progress: Option<ProgressHandle>,
-        prev: Option<(&AssemblyPlan, Arc<Unchanged>)>,
+        (prev, square): (
+            Option<(&AssemblyPlan, Arc<Unchanged>)>,
+            Option<&AssemblyPlan>,
+        ),
         only: Option<&[bool]>,
     ) -> Self {
         if let Some(p) = &progress {
@@ -223,7 +248,7 @@ impl AssemblyPlan {
             (opts.tol, bounce),
             occluders.as_ref(),
             &progress,
-            prev.as_ref().map(|(p, u)| (*p, &**u)),
+            (prev.as_ref().map(|(p, u)| (*p, &**u)), square),
             only,
         );
         let ladder = RuleLadder::new();

@@ -46,7 +46,7 @@ impl AssemblyPlan {
         only: &[bool],
     ) -> Self {
         assert_eq!(only.len(), disc.mesh().len(), "one flag per row block");
-        Self::build(disc, rows, opts, visibility, None, None, Some(only))
+        Self::build(disc, rows, opts, visibility, None, (None, None), Some(only))
     }
 
     /// What the row block of element `kp` holds, and, in a plan built by
