@@ -479,3 +479,97 @@ fn gltf_buffers_from_hostile_files() {
     load("t.bin", 36).expect("a plain buffer");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Accessors a hostile file may hold, each refused naming what is wrong
+/// (they were read as "no indices" and solved 2 of 12 triangles, dropped
+/// indices silently, or tripped the gltf crate's assertions): 35 indices,
+/// an index accessor past its view, an index view with a byteStride, a
+/// position view whose byteStride is shorter than a position, float
+/// indices. Morph targets are warned about: the base shape is solved.
+#[test]
+fn gltf_accessors_from_hostile_files() {
+    let dir = scratch("accessors");
+    let mut bin: Vec<u8> = [[0f32, 0., 0.], [1., 0., 0.], [0., 1., 0.]]
+        .iter()
+        .flat_map(|p| p.iter().flat_map(|x| x.to_le_bytes()))
+        .collect();
+    // 36 indices (u16) after the positions: 0, 1, 2 twelve times.
+    bin.extend((0..36u16).flat_map(|i| (i % 3).to_le_bytes()));
+    std::fs::write(dir.join("t.bin"), &bin).unwrap();
+    let path = dir.join("t.gltf");
+    let load = |views: Value, accessors: Value, primitive: Value| {
+        let doc = json!({
+            "asset": {"version": "2.0"},
+            "scenes": [{"nodes": [0]}],
+            "nodes": [{"mesh": 0}],
+            "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1]}, "emissiveFactor": [1, 1, 1]}],
+            "meshes": [{"primitives": [primitive]}],
+            "buffers": [{"uri": "t.bin", "byteLength": bin.len()}],
+            "bufferViews": views,
+            "accessors": accessors,
+        });
+        std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+        load_gltf(&path)
+    };
+    let position = json!({"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]});
+    let views = |index_view: Value| json!([{"buffer": 0, "byteLength": 36}, index_view]);
+    let indices = |count: usize, component: u32| json!({"bufferView": 1, "componentType": component, "count": count, "type": "SCALAR"});
+    let indexed = json!({"attributes": {"POSITION": 0}, "indices": 1, "material": 0});
+    let plain_view = json!({"buffer": 0, "byteOffset": 36, "byteLength": 72});
+    let scene = load(
+        views(plain_view.clone()),
+        json!([position, indices(36, 5123)]),
+        indexed.clone(),
+    )
+    .expect("36 indices");
+    // Twelve copies of one triangle are one piece of surface.
+    assert_eq!(scene.surface.patches[0].triangles.len(), 1);
+    let cases = [
+        (
+            "35 indices",
+            views(plain_view.clone()),
+            json!([position, indices(35, 5123)]),
+            "not a multiple of 3",
+        ),
+        (
+            "past its view",
+            views(json!({"buffer": 0, "byteOffset": 36, "byteLength": 40})),
+            json!([position, indices(36, 5123)]),
+            "run to byte 72",
+        ),
+        (
+            "strided indices",
+            views(json!({"buffer": 0, "byteOffset": 36, "byteLength": 72, "byteStride": 4})),
+            json!([position, indices(18, 5123)]),
+            "byteStride",
+        ),
+        (
+            "float indices",
+            views(plain_view.clone()),
+            json!([position, indices(18, 5126)]),
+            "not unsigned integers",
+        ),
+        (
+            "short position stride",
+            json!([{"buffer": 0, "byteLength": 36, "byteStride": 4}, plain_view.clone()]),
+            json!([position, indices(36, 5123)]),
+            "less than its 12-byte elements",
+        ),
+    ];
+    for (what, v, a, needle) in cases {
+        let msg = match load(v, a, indexed.clone()) {
+            Ok(_) => panic!("{what}: loaded"),
+            Err(e) => e.to_string(),
+        };
+        assert!(
+            msg.contains("t.gltf") && msg.contains(needle),
+            "{what}: {msg}"
+        );
+    }
+    let morphed =
+        json!({"attributes": {"POSITION": 0}, "material": 0, "targets": [{"POSITION": 0}]});
+    let scene = load(views(plain_view), json!([position]), morphed).expect("loads");
+    let warned = scene.warnings.iter().any(|w| w.contains("morph targets"));
+    assert!(warned, "{:?}", scene.warnings);
+    let _ = std::fs::remove_dir_all(&dir);
+}

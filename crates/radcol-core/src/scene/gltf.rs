@@ -21,6 +21,7 @@
 //! refused with the primitive named. The first perspective camera placed by
 //! a node becomes the scene's camera.
 
+use super::gltf_data::{check_accessors, read_buffers};
 use super::obj::MAX_SCENE_FILE_BYTES;
 use super::{Material, Scene, SceneBuilder, SceneError};
 use crate::camera::Camera;
@@ -58,86 +59,6 @@ pub fn load_gltf(path: &Path) -> Result<Scene, SceneError> {
     scene.source = Some(path.to_path_buf());
     scene.metres_per_unit = Some(1.0);
     Ok(scene)
-}
-
-/// The data of every buffer of `doc` (read from `path`, with the GLB's
-/// binary chunk `blob`): an embedded `data:` URI decoded, a file beside the
-/// scene read up to the buffer's `byteLength` and no further. A file that
-/// is not a regular file (a device, a pipe), lies outside the scene's
-/// directory, is shorter than its `byteLength`, or whose name does not
-/// decode to UTF-8 is refused, naming the buffer.
-fn read_buffers(
-    doc: &gltf::Document,
-    path: &Path,
-    mut blob: Option<Vec<u8>>,
-) -> Result<Vec<gltf::buffer::Data>, String> {
-    use std::io::Read;
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
-    let dir = std::fs::canonicalize(dir.unwrap_or(Path::new("."))).map_err(|e| e.to_string())?;
-    let mut out = Vec::new();
-    for b in doc.buffers() {
-        let (i, need) = (b.index(), b.length());
-        let bad = |m: String| format!("buffer {i}: {m}");
-        let mut data = match b.source() {
-            gltf::buffer::Source::Bin => blob
-                .take()
-                .ok_or_else(|| bad("the GLB has no binary chunk".into()))?,
-            gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
-                let source = gltf::buffer::Source::Uri(uri);
-                gltf::buffer::Data::from_source(source, None)
-                    .map_err(|e| bad(e.to_string()))?
-                    .0
-            }
-            gltf::buffer::Source::Uri(uri) => {
-                let file = buffer_file(uri, &dir).map_err(&bad)?;
-                let mut data = Vec::with_capacity(need.min(1 << 30));
-                std::fs::File::open(&file)
-                    .and_then(|f| f.take(need as u64).read_to_end(&mut data))
-                    .map_err(|e| bad(format!("{}: {e}", file.display())))?;
-                data
-            }
-        };
-        if data.len() < need {
-            return Err(bad(format!(
-                "{} bytes, where its byteLength says {need}",
-                data.len()
-            )));
-        }
-        while data.len() % 4 != 0 {
-            data.push(0);
-        }
-        out.push(gltf::buffer::Data(data));
-    }
-    Ok(out)
-}
-
-/// The regular file inside the scene's directory `dir` (canonical) that
-/// the buffer URI `uri` names (relative and percent-encoded, or `file:`).
-fn buffer_file(uri: &str, dir: &Path) -> Result<std::path::PathBuf, String> {
-    let named = if let Some(rest) = uri.strip_prefix("file://").or(uri.strip_prefix("file:")) {
-        std::path::PathBuf::from(rest)
-    } else if uri.contains(':') {
-        return Err(format!("URI {uri:?}: only data: URIs and files are read"));
-    } else {
-        let decoded = urlencoding::decode(uri)
-            .map_err(|_| format!("URI {uri:?} does not decode to UTF-8 text"))?;
-        dir.join(&*decoded)
-    };
-    let file = std::fs::canonicalize(&named).map_err(|e| format!("{}: {e}", named.display()))?;
-    if !file.starts_with(dir) {
-        return Err(format!(
-            "URI {uri:?} names {}, outside the scene's directory {}",
-            file.display(),
-            dir.display()
-        ));
-    }
-    if !std::fs::metadata(&file).is_ok_and(|m| m.is_file()) {
-        return Err(format!(
-            "{} is not a regular file (a device, a pipe or a directory)",
-            file.display()
-        ));
-    }
-    Ok(file)
 }
 
 /// What the walk gathers besides the builder's triangles.
@@ -294,6 +215,13 @@ impl Walk<'_> {
             return Ok(());
         }
         let material = self.material(&prim.material(), &at)?;
+        check_accessors(prim, self.buffers, &at)?;
+        if prim.morph_targets().len() > 0 {
+            self.warnings.push(format!(
+                "{at}: {} morph targets are not applied: the base shape is solved",
+                prim.morph_targets().len()
+            ));
+        }
         let reader = prim.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
         let positions: Vec<DVec3> = reader
             .read_positions()
@@ -303,10 +231,31 @@ impl Walk<'_> {
             })?
             .map(|p| world.transform_point3(DVec3::from_array(p.map(f64::from))))
             .collect();
-        let indices: Vec<u32> = match reader.read_indices() {
-            Some(ix) => ix.into_u32().collect(),
-            None => (0..positions.len() as u32).collect(),
+        let indices: Vec<u32> = match (prim.indices(), reader.read_indices()) {
+            (_, Some(ix)) => ix.into_u32().collect(),
+            (None, None) => (0..positions.len() as u32).collect(),
+            (Some(a), None) => {
+                return Err(SceneError::Syntax {
+                    at,
+                    message: format!("the indices (accessor {}) cannot be read", a.index()),
+                })
+            }
         };
+        if mode == Mode::Triangles && !indices.len().is_multiple_of(3) {
+            return Err(SceneError::Syntax {
+                at,
+                message: format!(
+                    "{} {} is not a multiple of 3: a triangle list would drop the last {}",
+                    indices.len(),
+                    if prim.indices().is_some() {
+                        "indices"
+                    } else {
+                        "vertices"
+                    },
+                    indices.len() % 3
+                ),
+            });
+        }
         let mut tris = triangles(mode, &indices);
         if world.determinant() < 0.0 {
             for t in &mut tris {

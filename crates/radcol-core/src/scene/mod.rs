@@ -31,6 +31,7 @@ mod builder;
 mod builtin;
 mod facing;
 mod gltf;
+mod gltf_data;
 mod ignored;
 pub mod imprint;
 mod mtl;
