@@ -2059,6 +2059,19 @@ fn at_points_gives_u_n_and_the_iterated_solution() {
         2,
         &[&format!("{bad}:2:"), "z = 'zero'"],
     );
+    // A column named twice: which one is meant is a guess, not read.
+    let twice = dir.join("twice.csv");
+    std::fs::write(&twice, "x,y,z,x\n1,0,0,0\n").unwrap();
+    let twice = twice.display().to_string();
+    assert_one_line_error(
+        &["solve", "sphere", "--at", &twice],
+        2,
+        &[
+            &format!("{twice}:1:"),
+            "'x' more than once",
+            "columns 1 and 4",
+        ],
+    );
     let out = radcol(&["solve", "sphere", "--at-out", "x.csv"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--at"));

@@ -126,6 +126,20 @@ fn positional(n: usize) -> Option<Columns> {
 fn named(header: &csv::StringRecord) -> Result<Columns, String> {
     let find = |name: &str| header.iter().position(|h| h.eq_ignore_ascii_case(name));
     let names: Vec<&str> = header.iter().collect();
+    // A column read is named once: which of two would be meant is a guess.
+    for name in ["x", "y", "z", "nx", "ny", "nz", "label", "name"] {
+        let at: Vec<usize> = (names.iter().enumerate())
+            .filter(|(_, h)| h.eq_ignore_ascii_case(name))
+            .map(|(i, _)| i + 1)
+            .collect();
+        if at.len() > 1 {
+            let at: Vec<String> = at.iter().map(usize::to_string).collect();
+            return Err(format!(
+                "the header names '{name}' more than once (columns {})",
+                at.join(" and ")
+            ));
+        }
+    }
     let need = |name: &str| {
         find(name).ok_or_else(|| {
             format!(
