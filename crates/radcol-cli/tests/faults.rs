@@ -698,6 +698,22 @@ fn obj_cases() -> Vec<Case> {
     let mut cases = vec![
         with_files(
             case(
+                "one material name in two MTL files",
+                &solve,
+                Warned(&["2 materials are named 'white'", "different values"]),
+            ),
+            vec![
+                ("w.mtl", WHITE.as_bytes().to_vec()),
+                ("v.mtl", b"newmtl white\nKd 0.2 0.2 0.2\n".to_vec()),
+                (
+                    "s.obj",
+                    format!("mtllib w.mtl\nmtllib v.mtl\n{tri}usemtl white\nf 1 2 3\n")
+                        .into_bytes(),
+                ),
+            ],
+        ),
+        with_files(
+            case(
                 "UTF-8 byte-order marks",
                 &solve,
                 Answer("/channels/0/integral_e", 0.5, 1e-14),

@@ -122,20 +122,22 @@ fn scene_problem(spec: &str, scene: &Scene) -> Result<Problem> {
             return Err(bad_input(format!("--relight '{spec}': {range}")).into());
         }
         let names: Vec<&str> = scene.materials.iter().map(|m| m.name.as_str()).collect();
-        let m = changed
-            .materials
-            .iter_mut()
-            .find(|m| m.name == name)
-            .ok_or_else(|| {
-                bad_input(format!(
-                    "--relight '{spec}': the scene has no material '{name}' (it has {})",
-                    names.join(", ")
-                ))
-            })?;
-        if reflectance {
-            m.rho = [r, g, b];
-        } else {
-            m.emission = [r, g, b];
+        // Every material of that name (a scene may hold two: its warnings say so).
+        let mut found = false;
+        for m in changed.materials.iter_mut().filter(|m| m.name == name) {
+            found = true;
+            if reflectance {
+                m.rho = [r, g, b];
+            } else {
+                m.emission = [r, g, b];
+            }
+        }
+        if !found {
+            return Err(bad_input(format!(
+                "--relight '{spec}': the scene has no material '{name}' (it has {})",
+                names.join(", ")
+            ))
+            .into());
         }
     }
     Ok(changed.problem())

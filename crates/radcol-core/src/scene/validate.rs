@@ -50,6 +50,32 @@ pub(crate) fn check_material(m: &Material, at: &str) -> Result<(), SceneError> {
 }
 
 /// Runs the shared repairs and warnings and builds the scene.
+/// One warning per name that materials with different values share (two
+/// `newmtl` of one name, or one name in two MTL files): each face keeps
+/// the material it was given, and a change by name changes every one.
+fn same_names(materials: &[Material]) -> Vec<String> {
+    let mut out = Vec::new();
+    for (i, m) in materials.iter().enumerate() {
+        let first = materials.iter().position(|o| o.name == m.name) == Some(i);
+        let others: Vec<&Material> = (materials[i + 1..].iter())
+            .filter(|o| o.name == m.name && (o.rho != m.rho || o.emission != m.emission))
+            .collect();
+        if first && !others.is_empty() {
+            let values: Vec<String> = std::iter::once(m)
+                .chain(others)
+                .map(|o| format!("ρ {:?}, E {:?}", o.rho, o.emission))
+                .collect();
+            out.push(format!(
+                "{} materials are named '{}' with different values ({}): each face keeps the one it was given, and a change by that name changes all of them",
+                values.len(),
+                m.name,
+                values.join("; ")
+            ));
+        }
+    }
+    out
+}
+
 pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
     let RawScene {
         name,
@@ -65,6 +91,7 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
             detail: String::new(),
         });
     }
+    warnings.extend(same_names(&materials));
     if let Some(c) = &camera {
         c.validate().map_err(|message| SceneError::Camera {
             name: name.clone(),
