@@ -695,7 +695,27 @@ fn flag_cases() -> Vec<Case> {
 fn obj_cases() -> Vec<Case> {
     let solve = ["solve", "{dir}/s.obj"];
     let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    let big_library: String = (0..20_000)
+        .map(|i| format!("newmtl m{i}\nKd 0.5 0.5 0.5\n"))
+        .chain([WHITE.to_string()])
+        .collect();
+    let many_mtllib = format!(
+        "{}{tri}usemtl white\nf 1 2 3\n",
+        "mtllib w.mtl\n".repeat(5_000)
+    );
     let mut cases = vec![
+        with_files(
+            case(
+                "5 000 mtllib lines of a 20 000-material library",
+                &solve,
+                // The text report: the JSON lists the 20 001 materials.
+                Says(&["1 triangles, 20001 materials", "∫E = 0.500000000000"]),
+            ),
+            vec![
+                ("w.mtl", big_library.into_bytes()),
+                ("s.obj", many_mtllib.into_bytes()),
+            ],
+        ),
         with_files(
             case(
                 "one material name in two MTL files",

@@ -28,14 +28,20 @@ pub(super) fn match_tobj(
         ignore_lines: true,
         ..Default::default()
     };
-    let (models, tobj_materials) =
-        tobj::load_obj_buf(&mut text.as_bytes(), &options, |p| {
-            match libs.get(p.to_string_lossy().as_ref()) {
-                Some(t) => tobj::load_mtl_buf(&mut t.as_bytes()),
-                None => Err(tobj::LoadError::OpenFileFailed),
-            }
-        })
-        .map_err(|e| reader_error(file.into(), e.to_string()))?;
+    // A library named again gives nothing new (as in the line scan): tobj
+    // would parse it once per mtllib line.
+    let read = std::cell::RefCell::new(std::collections::HashSet::new());
+    let (models, tobj_materials) = tobj::load_obj_buf(&mut text.as_bytes(), &options, |p| {
+        let name = p.to_string_lossy().into_owned();
+        if !read.borrow_mut().insert(name.clone()) {
+            return Ok((Vec::new(), Default::default()));
+        }
+        match libs.get(&name) {
+            Some(t) => tobj::load_mtl_buf(&mut t.as_bytes()),
+            None => Err(tobj::LoadError::OpenFileFailed),
+        }
+    })
+    .map_err(|e| reader_error(file.into(), e.to_string()))?;
     let tobj_materials = tobj_materials.map_err(|e| reader_error(file.into(), e.to_string()))?;
 
     let mut expected = faces.iter();
