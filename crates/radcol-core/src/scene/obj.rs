@@ -154,19 +154,15 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
                     group = "unnamed_object".into();
                 }
             }
-            // A library named again adds nothing it has not added: read
-            // once (5 000 mtllib lines of one 20 000-material library held
-            // 10^8 materials).
-            "mtllib" if libs.contains_key(rest(line, keyword)) => {}
             "mtllib" => {
-                let lib = rest(line, keyword);
-                let first = materials.len();
-                let mtl_text =
-                    read_mtllib(lib, resolve, &at(line_no), &mut materials, &mut warnings)?;
-                for (m, mat) in materials.iter().enumerate().skip(first) {
-                    by_name.insert(mat.name.clone(), m);
-                }
-                libs.insert(lib.to_string(), mtl_text);
+                let library = (&mut materials, &mut by_name, &mut libs);
+                read_mtllib(
+                    rest(line, keyword),
+                    resolve,
+                    &at(line_no),
+                    library,
+                    &mut warnings,
+                )?;
             }
             "usemtl" => {
                 let name = rest(line, keyword);
@@ -269,25 +265,43 @@ fn parse_texcoord<'a>(
     }
 }
 
+/// What the libraries read so far hold: the materials, their index by
+/// name, and each library's text by the name its `mtllib` uses.
+type Library<'a> = (
+    &'a mut Vec<Material>,
+    &'a mut HashMap<String, usize>,
+    &'a mut HashMap<String, String>,
+);
+
 /// Reads the material library `lib` of an `mtllib` statement through
-/// `resolve` and appends its materials; returns the library's text.
+/// `resolve` and adds its materials to `library`. A library named again
+/// adds nothing: it is read once (5 000 `mtllib` lines of one
+/// 20 000-material library held 10^8 materials).
 fn read_mtllib(
     lib: &str,
     resolve: &Resolver,
     at: &str,
-    materials: &mut Vec<Material>,
+    (materials, by_name, libs): Library<'_>,
     warnings: &mut Vec<String>,
-) -> Result<String, SceneError> {
+) -> Result<(), SceneError> {
     if lib.is_empty() {
         return Err(syntax(at.to_string(), "mtllib without a file name"));
+    }
+    if libs.contains_key(lib) {
+        return Ok(());
     }
     let (label, mtl_text) = resolve(lib).map_err(|(mtl, message)| SceneError::MaterialLibrary {
         at: at.to_string(),
         mtl,
         message,
     })?;
+    let first = materials.len();
     materials.extend(super::mtl::parse_mtl(&label, &mtl_text, warnings)?);
-    Ok(mtl_text)
+    for (m, mat) in materials.iter().enumerate().skip(first) {
+        by_name.insert(mat.name.clone(), m);
+    }
+    libs.insert(lib.to_string(), mtl_text);
+    Ok(())
 }
 
 /// A `v x y z [w]` statement: finite coordinates, divided by w when given.

@@ -8,17 +8,17 @@ use super::{Material, SceneError, TriangleOrigin};
 use glam::DVec3;
 use std::collections::HashMap;
 
-/// Runs tobj on the scanned text and pairs its polygons, in order, with the
-/// scanned faces, checking group, material and positions; then triangulates
-/// each face ([`super::polygon`]), warning about self-intersecting ones.
-pub(super) fn match_tobj(
+/// tobj's models and materials of the scanned `text`, its libraries read
+/// from `libs`.
+fn run_tobj(
     file: &str,
     text: &str,
     libs: &HashMap<String, String>,
-    (faces, positions, materials): (&[ScanFace], &[DVec3], &[Material]),
-    warnings: &mut Vec<String>,
-) -> Result<Vec<RawTriangle>, SceneError> {
-    let reader_error = |at: String, message: String| SceneError::Reader { at, message };
+) -> Result<(Vec<tobj::Model>, Vec<tobj::Material>), SceneError> {
+    let reader_error = |message: String| SceneError::Reader {
+        at: file.into(),
+        message,
+    };
     // More fields exist when tobj's optional features are on, hence the update.
     #[allow(clippy::needless_update)]
     let options = tobj::LoadOptions {
@@ -31,7 +31,7 @@ pub(super) fn match_tobj(
     // A library named again gives nothing new (as in the line scan): tobj
     // would parse it once per mtllib line.
     let read = std::cell::RefCell::new(std::collections::HashSet::new());
-    let (models, tobj_materials) = tobj::load_obj_buf(&mut text.as_bytes(), &options, |p| {
+    let (models, materials) = tobj::load_obj_buf(&mut text.as_bytes(), &options, |p| {
         let name = p.to_string_lossy().into_owned();
         if !read.borrow_mut().insert(name.clone()) {
             return Ok((Vec::new(), Default::default()));
@@ -41,8 +41,22 @@ pub(super) fn match_tobj(
             None => Err(tobj::LoadError::OpenFileFailed),
         }
     })
-    .map_err(|e| reader_error(file.into(), e.to_string()))?;
-    let tobj_materials = tobj_materials.map_err(|e| reader_error(file.into(), e.to_string()))?;
+    .map_err(|e| reader_error(e.to_string()))?;
+    Ok((models, materials.map_err(|e| reader_error(e.to_string()))?))
+}
+
+/// Runs tobj on the scanned text and pairs its polygons, in order, with the
+/// scanned faces, checking group, material and positions; then triangulates
+/// each face ([`super::polygon`]), warning about self-intersecting ones.
+pub(super) fn match_tobj(
+    file: &str,
+    text: &str,
+    libs: &HashMap<String, String>,
+    (faces, positions, materials): (&[ScanFace], &[DVec3], &[Material]),
+    warnings: &mut Vec<String>,
+) -> Result<Vec<RawTriangle>, SceneError> {
+    let reader_error = |at: String, message: String| SceneError::Reader { at, message };
+    let (models, tobj_materials) = run_tobj(file, text, libs)?;
 
     let mut expected = faces.iter();
     let mut out = Vec::new();
