@@ -280,15 +280,21 @@ fn gltf_cornell_box_matches_its_obj_twin() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The positions of the unit right triangle (0,0,0), (1,0,0), (0,1,0), as
+/// a glTF buffer of little-endian f32 (36 bytes).
+fn triangle_bin() -> Vec<u8> {
+    [[0f32, 0., 0.], [1., 0., 0.], [0., 1., 0.]]
+        .iter()
+        .flat_map(|p| p.iter().flat_map(|x| x.to_le_bytes()))
+        .collect()
+}
+
 /// A primitive without a material (glTF's default is white, ρ = 1) is
 /// refused naming the file and mesh; a broken file is refused naming it.
 #[test]
 fn gltf_faults_name_the_file_and_the_mesh() {
     let dir = scratch("faults");
-    let bin: Vec<u8> = [[0f32, 0., 0.], [1., 0., 0.], [0., 1., 0.]]
-        .iter()
-        .flat_map(|p| p.iter().flat_map(|x| x.to_le_bytes()))
-        .collect();
+    let bin = triangle_bin();
     let doc = json!({
         "asset": {"version": "2.0"},
         "scenes": [{"nodes": [0]}],
@@ -328,10 +334,7 @@ fn gltf_faults_name_the_file_and_the_mesh() {
 #[test]
 fn gltf_node_trees_from_hostile_files() {
     let dir = scratch("nodes");
-    let bin: Vec<u8> = [[0f32, 0., 0.], [1., 0., 0.], [0., 1., 0.]]
-        .iter()
-        .flat_map(|p| p.iter().flat_map(|x| x.to_le_bytes()))
-        .collect();
+    let bin = triangle_bin();
     std::fs::write(dir.join("t.bin"), &bin).unwrap();
     let doc = |nodes: Value, roots: Value| {
         json!({
@@ -428,10 +431,7 @@ fn gltf_node_trees_from_hostile_files() {
 #[test]
 fn gltf_buffers_from_hostile_files() {
     let dir = scratch("buffers");
-    let bin: Vec<u8> = [[0f32, 0., 0.], [1., 0., 0.], [0., 1., 0.]]
-        .iter()
-        .flat_map(|p| p.iter().flat_map(|x| x.to_le_bytes()))
-        .collect();
+    let bin = triangle_bin();
     let path = dir.join("t.gltf");
     let load = |uri: &str, length: usize| {
         let doc = json!({
@@ -489,10 +489,7 @@ fn gltf_buffers_from_hostile_files() {
 #[test]
 fn gltf_accessors_from_hostile_files() {
     let dir = scratch("accessors");
-    let mut bin: Vec<u8> = [[0f32, 0., 0.], [1., 0., 0.], [0., 1., 0.]]
-        .iter()
-        .flat_map(|p| p.iter().flat_map(|x| x.to_le_bytes()))
-        .collect();
+    let mut bin = triangle_bin();
     // 36 indices (u16) after the positions: 0, 1, 2 twelve times.
     bin.extend((0..36u16).flat_map(|i| (i % 3).to_le_bytes()));
     std::fs::write(dir.join("t.bin"), &bin).unwrap();
