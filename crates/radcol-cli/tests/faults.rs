@@ -589,6 +589,11 @@ fn flag_cases() -> Vec<Case> {
             Refused(2, &["--adaptive 1e-300", "[1e-8, 1)"]),
         ),
         case(
+            "--at /dev/zero",
+            &["solve", "sphere", "--level", "0", "--at", "/dev/zero"],
+            Refused(2, &["--at /dev/zero", "not a regular file"]),
+        ),
+        case(
             "--threads 65535",
             &["--threads", "65535", "solve", "sphere", "--level", "0"],
             Refused(2, &["--threads 65535", "per logical CPU"]),

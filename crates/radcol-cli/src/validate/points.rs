@@ -39,12 +39,29 @@ struct Columns {
     count: Option<usize>,
 }
 
+/// The largest `--at` file read: about ten million points.
+const MAX_POINTS_FILE_BYTES: u64 = 1 << 30;
+
 /// Reads `--at path` and checks `--at-out`.
 pub(super) fn points(path: &Path, out: Option<&Path>, force: bool) -> Result<PointsSpec, BadInput> {
     let out = out
         .map(|p| only("--at-out", "csv", p, force, "the point values are CSV"))
         .transpose()?;
     let shown = path.display();
+    // A device or a pipe never ends; a file of points is not gigabytes.
+    let meta = std::fs::metadata(path).map_err(|e| bad_input(format!("--at {shown}: {e}")))?;
+    if !meta.is_file() {
+        return Err(bad_input(format!(
+            "--at {shown}: not a regular file (a device, a pipe or a directory)"
+        )));
+    }
+    if meta.len() > MAX_POINTS_FILE_BYTES {
+        return Err(bad_input(format!(
+            "--at {shown}: {} MiB is more than the {} MiB a points file may hold",
+            meta.len() >> 20,
+            MAX_POINTS_FILE_BYTES >> 20
+        )));
+    }
     let bytes = std::fs::read(path).map_err(|e| bad_input(format!("--at {shown}: {e}")))?;
     let text =
         String::from_utf8(bytes).map_err(|_| bad_input(format!("--at {shown}: not UTF-8 text")))?;
