@@ -193,20 +193,9 @@ pub fn render_scene(
     opts: &RenderOptions,
 ) -> Result<Image, RenderError> {
     check_solutions(mesh, solutions)?;
-    if emits.len() != mesh.len() {
-        return Err(RenderError::MeshMismatch {
-            channel: 0,
-            elements: emits.len(),
-            expected: mesh.len(),
-        });
-    }
+    check_per_element(mesh, emits.len())?;
     let bvh = ElementBvh::new(mesh, opts.curved_subdivisions);
-    let mut image = render_with(&bvh, mesh, solutions, camera, opts)?;
-    let lights = trace(&bvh, camera, opts, &|hit: Option<&Hit>| {
-        Some([f64::from(u8::from(hit.is_some_and(|h| h.front && emits[h.element]))); 3])
-    })?;
-    image.emitted = lights.rgb.iter().map(|c| c[0]).collect();
-    Ok(image)
+    shade_solutions(&bvh, solutions, Some(emits), camera, opts)
 }
 
 /// Renders with a prebuilt hierarchy (for several views of one mesh).
@@ -222,13 +211,38 @@ pub fn render_with(
     opts: &RenderOptions,
 ) -> Result<Image, RenderError> {
     check_solutions(mesh, solutions)?;
-    trace(bvh, camera, opts, &|hit: Option<&Hit>| {
+    shade_solutions(bvh, solutions, None, camera, opts)
+}
+
+/// The image of `solutions`, with where rays met the elements `emits` marks
+/// when given ([`Image::emitted`]), in one pass of rays.
+fn shade_solutions(
+    bvh: &ElementBvh,
+    solutions: &[&Solution],
+    emits: Option<&[bool]>,
+    camera: &Camera,
+    opts: &RenderOptions,
+) -> Result<Image, RenderError> {
+    let shade = |hit: Option<&Hit>| {
         Some(match hit {
             Some(h) if h.front => eval_rgb(solutions, h.element, h.st[0], h.st[1]).map(|u| u / PI),
             Some(_) => [0.0; 3],
             None => opts.background.map(f64::from),
         })
-    })
+    };
+    trace(bvh, camera, opts, &shade, emits)
+}
+
+/// Refuses a per-element list of `len` values for `mesh` of another length.
+fn check_per_element(mesh: &Mesh, len: usize) -> Result<(), RenderError> {
+    if len != mesh.len() {
+        return Err(RenderError::MeshMismatch {
+            channel: 0,
+            elements: len,
+            expected: mesh.len(),
+        });
+    }
+    Ok(())
 }
 
 /// A per-element value seen by `camera`: each pixel holds the mean of
@@ -242,17 +256,10 @@ pub fn render_element_values(
     camera: &Camera,
     opts: &RenderOptions,
 ) -> Result<Image, RenderError> {
-    if per_element.len() != mesh.len() {
-        return Err(RenderError::MeshMismatch {
-            channel: 0,
-            elements: per_element.len(),
-            expected: mesh.len(),
-        });
-    }
+    check_per_element(mesh, per_element.len())?;
     let bvh = ElementBvh::new(mesh, opts.curved_subdivisions);
-    trace(&bvh, camera, opts, &|hit: Option<&Hit>| {
-        hit.filter(|h| h.front).map(|h| [per_element[h.element]; 3])
-    })
+    let shade = |hit: Option<&Hit>| hit.filter(|h| h.front).map(|h| [per_element[h.element]; 3]);
+    trace(&bvh, camera, opts, &shade, None)
 }
 
 /// Where in a pixel (offsets in [0, 1)²) its `spp` rays go: a square
@@ -284,6 +291,7 @@ fn trace(
     camera: &Camera,
     opts: &RenderOptions,
     shade: &(dyn Fn(Option<&Hit>) -> Option<[f64; 3]> + Sync),
+    emits: Option<&[bool]>,
 ) -> Result<Image, RenderError> {
     let RenderOptions {
         width,
@@ -302,20 +310,35 @@ fn trace(
     let w = width as usize;
     let mut rgb = vec![[0.0f32; 3]; w * height as usize];
     let mut coverage = vec![0.0f32; w * height as usize];
+    let mut emitted = vec![
+        0.0f32;
+        if emits.is_some() {
+            w * height as usize
+        } else {
+            0
+        }
+    ];
     let offsets = pixel_samples(samples_per_pixel);
     let weight = 1.0 / offsets.len() as f64;
+    // Rows of `emitted` (none when it is empty).
+    let lit_rows: Vec<&mut [f32]> = emitted.chunks_mut(w).collect();
+    let mut lit_rows: Vec<Option<&mut [f32]>> = lit_rows.into_iter().map(Some).collect();
+    lit_rows.resize_with(height as usize, || None);
     rgb.par_chunks_mut(w)
         .zip(coverage.par_chunks_mut(w))
+        .zip(lit_rows.into_par_iter())
         .enumerate()
-        .for_each(|(y, (row, cov))| {
+        .for_each(|(y, ((row, cov), mut lit))| {
             for x in 0..w {
                 let mut acc = [0.0f64; 3];
-                let (mut hits, mut shaded) = (0u32, 0u32);
+                let (mut hits, mut shaded, mut lights) = (0u32, 0u32, 0u32);
                 for &[dx, dy] in &offsets {
                     let (px, py) = (x as f64 + dx, y as f64 + dy);
                     let dir = camera.ray_direction(px, py, width, height);
                     let hit = bvh.closest_hit(camera.eye, dir);
                     hits += u32::from(hit.is_some());
+                    let light = |e: &[bool]| hit.as_ref().is_some_and(|h| h.front && e[h.element]);
+                    lights += u32::from(emits.is_some_and(light));
                     if let Some(v) = shade(hit.as_ref()) {
                         shaded += 1;
                         for c in 0..3 {
@@ -331,6 +354,9 @@ fn trace(
                 };
                 row[x] = acc.map(|a| (a * mean) as f32);
                 cov[x] = (hits as f64 * weight) as f32;
+                if let Some(lit) = lit.as_deref_mut() {
+                    lit[x] = (lights as f64 * weight) as f32;
+                }
             }
         });
     Ok(Image {
@@ -338,7 +364,7 @@ fn trace(
         height,
         rgb,
         coverage,
-        emitted: Vec::new(),
+        emitted,
     })
 }
 
