@@ -84,6 +84,8 @@ pub mod problem;
 pub mod progress;
 pub mod quadrature;
 pub mod query;
+#[cfg(all(feature = "scenes", feature = "render"))]
+pub mod radiosity;
 #[cfg(feature = "render")]
 pub mod render;
 pub mod run;

@@ -42,31 +42,10 @@ pub use crate::solution::Solution;
 /// that a program needs no glam dependency of its own.
 pub use glam::{self, DVec3};
 
+pub use crate::progress::Cancel;
+pub use crate::radiosity::{CornerValues, Error, Radiosity, Refinement, Settings};
+pub use crate::scene::MaterialChange;
 use std::path::Path;
-
-/// Every failure of the calls above: a solve's ([`crate::error::Error`],
-/// bad input included), a scene file's, a render's, a point query's.
-#[derive(Debug, thiserror::Error)]
-pub enum Error {
-    /// The solve (bad input, a solver or backend failure, cancellation).
-    #[error(transparent)]
-    Solve(#[from] crate::error::Error),
-    /// A scene file.
-    #[error(transparent)]
-    Scene(#[from] SceneError),
-    /// Rendering or tessellating a solution.
-    #[error(transparent)]
-    Render(#[from] RenderError),
-    /// A point query.
-    #[error(transparent)]
-    Query(#[from] QueryError),
-}
-
-impl From<crate::error::InputError> for Error {
-    fn from(e: crate::error::InputError) -> Self {
-        Error::Solve(e.into())
-    }
-}
 
 /// Loads a scene file by its extension: `.obj` ([`load_obj`]), `.gltf` or
 /// `.glb` ([`load_gltf`]); anything else is refused with the path named.

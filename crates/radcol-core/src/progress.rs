@@ -59,3 +59,35 @@ impl ProgressHandle {
         self.0.cancelled()
     }
 }
+
+/// A [`Progress`] that draws nothing and stops a solve when asked:
+/// [`Cancel::cancel`] from any thread, and the solve holding its handle
+/// ([`Cancel::handle`]) returns [`crate::error::Error::Cancelled`] at its
+/// next check (per row block, per GMRES iteration, between stages).
+#[derive(Debug, Default)]
+pub struct Cancel(std::sync::atomic::AtomicBool);
+
+impl Cancel {
+    /// A flag not yet set, shared.
+    pub fn new() -> Arc<Self> {
+        Arc::new(Self::default())
+    }
+
+    /// Asks the solve to stop.
+    pub fn cancel(&self) {
+        self.0.store(true, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// The handle to give the solve.
+    pub fn handle(self: &Arc<Self>) -> ProgressHandle {
+        ProgressHandle(self.clone())
+    }
+}
+
+impl Progress for Cancel {
+    fn start(&self, _stage: &str, _total: u64) {}
+    fn advance(&self, _n: u64) {}
+    fn cancelled(&self) -> bool {
+        self.0.load(std::sync::atomic::Ordering::Relaxed)
+    }
+}

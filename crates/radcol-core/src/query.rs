@@ -25,7 +25,7 @@ use crate::discretization::Discretization;
 use crate::mesh::{Located, Locator};
 use crate::problem::Problem;
 use crate::quadrature::RuleLadder;
-use crate::run::SolveOutcome;
+use crate::run::{ChannelResult, SolveOutcome};
 use crate::visibility::{self, clip, Occluders, VisibilityAnalysis};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -216,49 +216,69 @@ pub fn query(
     points: &[QueryPoint],
     snap: f64,
 ) -> Result<Vec<PointValues>, QueryError> {
-    let disc = outcome.discretization.clone();
-    let eval = PointEvaluator::new(disc.clone(), opts, &outcome.visibility);
-    let reach = snap * eval.diagonal();
-    let located: Vec<Located> = points
-        .iter()
-        .enumerate()
-        .map(|(index, q)| {
-            eval.locate(q, reach).ok_or(QueryError::NotOnSurface {
-                index,
-                position: q.position,
-                faced: q.normal.is_some(),
-                reach,
-            })
-        })
-        .collect::<Result<_, _>>()?;
-    let mesh = disc.mesh();
-    Ok(located
-        .into_par_iter()
-        .map(|at| {
-            let (row, _) = eval.row(&at);
-            let site = mesh.site(at.element, at.st[0], at.st[1]);
-            let channels = outcome
-                .channels
-                .iter()
-                .zip(&problem.channels)
-                .map(|(ch, fields)| {
-                    let values = ch.solution.nodal();
-                    let ku: f64 = row.iter().zip(values).map(|(a, b)| a * b).sum();
-                    let u = ch.solution.eval(at.element, at.st[0], at.st[1]);
-                    ChannelValue {
-                        u,
-                        iterated: fields.emission.eval(&site) + fields.rho.eval(&site) * ku,
-                        estimate: ch
-                            .estimate
-                            .as_ref()
-                            .map(|e| e.elements[at.element] + e.visibility_bound),
-                    }
+    let eval = PointEvaluator::new(outcome.discretization.clone(), opts, &outcome.visibility);
+    eval.query(problem, &outcome.channels, points, snap)
+}
+
+impl PointEvaluator {
+    /// [`query`] for the solutions `channels` on this evaluator's
+    /// discretization (a solve's, or a relit set's: their estimates are
+    /// None), with `problem`'s ρ and E.
+    ///
+    /// # Panics
+    /// When a channel's solution lies on another discretization.
+    pub fn query(
+        &self,
+        problem: &Problem,
+        channels: &[ChannelResult],
+        points: &[QueryPoint],
+        snap: f64,
+    ) -> Result<Vec<PointValues>, QueryError> {
+        assert!(
+            (channels.iter()).all(|c| c.solution.nodal().len() == self.disc.len()),
+            "the solutions lie on another discretization"
+        );
+        let reach = snap * self.diagonal();
+        let located: Vec<Located> = points
+            .iter()
+            .enumerate()
+            .map(|(index, q)| {
+                self.locate(q, reach).ok_or(QueryError::NotOnSurface {
+                    index,
+                    position: q.position,
+                    faced: q.normal.is_some(),
+                    reach,
                 })
-                .collect();
-            PointValues {
-                located: at,
-                channels,
-            }
-        })
-        .collect())
+            })
+            .collect::<Result<_, _>>()?;
+        let mesh = self.disc.mesh();
+        Ok(located
+            .into_par_iter()
+            .map(|at| {
+                let (row, _) = self.row(&at);
+                let site = mesh.site(at.element, at.st[0], at.st[1]);
+                let channels = channels
+                    .iter()
+                    .zip(&problem.channels)
+                    .map(|(ch, fields)| {
+                        let values = ch.solution.nodal();
+                        let ku: f64 = row.iter().zip(values).map(|(a, b)| a * b).sum();
+                        let u = ch.solution.eval(at.element, at.st[0], at.st[1]);
+                        ChannelValue {
+                            u,
+                            iterated: fields.emission.eval(&site) + fields.rho.eval(&site) * ku,
+                            estimate: ch
+                                .estimate
+                                .as_ref()
+                                .map(|e| e.elements[at.element] + e.visibility_bound),
+                        }
+                    })
+                    .collect();
+                PointValues {
+                    located: at,
+                    channels,
+                }
+            })
+            .collect())
+    }
 }

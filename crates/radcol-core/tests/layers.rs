@@ -34,6 +34,7 @@ const LAYERS: &[&str] = &[
     "study",
     "render",
     "scene",
+    "radiosity",
     "prelude",
 ];
 

@@ -29,6 +29,7 @@
 
 mod builder;
 mod builtin;
+mod change;
 mod facing;
 mod gltf;
 mod gltf_data;
@@ -45,6 +46,7 @@ mod validate;
 
 pub use builder::SceneBuilder;
 pub use builtin::{builtin, BUILTIN_SCENES};
+pub use change::MaterialChange;
 pub use gltf::load_gltf;
 pub use imprint::Imprinted;
 pub use obj::{load_obj, load_obj_str};
@@ -161,6 +163,14 @@ pub enum SceneError {
         at: String,
         /// The material.
         material: String,
+    },
+    /// A material asked for by name that the scene does not have.
+    #[error("the scene has no material '{name}' (it has {known})")]
+    NoSuchMaterial {
+        /// The name asked for.
+        name: String,
+        /// The scene's material names, comma-separated.
+        known: String,
     },
     /// A reflectance component outside [0, 1).
     #[error("{at}: material '{material}': Kd {component} = {value} lies outside [0, 1)")]

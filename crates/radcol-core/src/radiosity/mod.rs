@@ -1,0 +1,268 @@
+//! The front door: [`Radiosity`] owns a solved scene (the scene, its
+//! discretization, the assembled operator and the solution of every colour
+//! channel) and answers what a program asks of it afterwards: values at
+//! points, new lights and materials without reassembly, colours at the
+//! input mesh's corners, images.
+//!
+//! ```
+//! use radcol_core::prelude::*;
+//!
+//! let scene = builtin("cornell").expect("a built-in scene")?;
+//! let settings = Settings { target_error: Some(5e-2), ..Settings::default() };
+//! let mut solved = Radiosity::solve(scene, &settings)?;
+//! let floor = [QueryPoint { position: DVec3::new(278.0, 0.0, 280.0), normal: None }];
+//! let before = solved.query(&floor)?[0].channels[0].iterated;
+//! solved.relight(&[("light", MaterialChange::Emission([0.0, 0.0, 0.0]))])?;
+//! assert!(before > 0.0 && solved.query(&floor)?[0].channels[0].iterated == 0.0);
+//! # Ok::<(), radcol_core::prelude::Error>(())
+//! ```
+//!
+//! Its settings are the command's: without a target, one solve on the
+//! scene's triangles refined to a tenth of its diagonal at degree 1; with
+//! one, adaptive refinement from the scene's own triangles, each starting
+//! at the degree its size needs ([`crate::run::start_degree`]).
+
+mod corners;
+mod error;
+
+pub use corners::CornerValues;
+pub use error::Error;
+
+use crate::alpha0::auto_alpha;
+use crate::assembly::{AssemblyBackend, CpuBackend};
+use crate::camera::Camera;
+use crate::error::InputError;
+use crate::problem::Problem;
+use crate::progress::ProgressHandle;
+use crate::query::{PointEvaluator, PointValues, QueryPoint, DEFAULT_SNAP};
+use crate::render::{render_scene, Corners, Image, RenderOptions, VertexMesh};
+use crate::run::adapt::{solve_adaptive, AdaptOptions, AdaptStep, StopReason};
+use crate::run::{solve, ChannelResult, Relighter, SolveConfig, SolveOutcome};
+use crate::scene::{MaterialChange, Scene};
+use crate::solution::Solution;
+use std::sync::OnceLock;
+
+/// What to solve for. `Settings::default()` is what `radcol solve` does
+/// on a scene given no flag.
+#[derive(Clone, Debug, Default)]
+pub struct Settings {
+    /// The largest error to reach, relative to max |u| (the a posteriori
+    /// estimate, [`crate::estimate`]): refine adaptively until it holds.
+    /// None: one solve on the default mesh.
+    pub target_error: Option<f64>,
+    /// Polynomial degree of every element (0..=6). None: degree 1 without
+    /// a target; with one, each input triangle starts at the lowest degree
+    /// its size needs and the loop raises it where the estimate asks.
+    pub degree: Option<usize>,
+    /// Progress observer; cancel the solve through it
+    /// ([`crate::progress::Cancel`]).
+    pub progress: Option<ProgressHandle>,
+}
+
+impl Settings {
+    /// The solve configuration and, with a target, the adaptive options
+    /// these settings give on `scene`.
+    pub fn configure(&self, scene: &Scene) -> (SolveConfig, Option<AdaptOptions>) {
+        let adapt = self.target_error.map(|target| AdaptOptions {
+            target,
+            graded_start: self.degree.is_none(),
+            ..AdaptOptions::default()
+        });
+        let mut config = scene.solve_config(adapt.is_some());
+        if let Some(r) = self.degree {
+            config.degree = r;
+            config.alpha = auto_alpha(r);
+        }
+        config.progress = self.progress.clone();
+        (config, adapt)
+    }
+}
+
+/// How an adaptive solve ended.
+#[derive(Clone, Debug)]
+pub struct Refinement {
+    /// Every step, in order.
+    pub steps: Vec<AdaptStep>,
+    /// Why it stopped.
+    pub stop: StopReason,
+}
+
+/// A solved scene that owns all it needs (`'static`, `Send + Sync`): query
+/// it, relight it, read its colours and render it from any thread.
+#[derive(Debug)]
+pub struct Radiosity {
+    scene: Scene,
+    problem: Problem,
+    config: SolveConfig,
+    outcome: SolveOutcome,
+    refinement: Option<Refinement>,
+    /// The channels after [`Radiosity::relight`]; None: the solve's.
+    relit: Option<Vec<ChannelResult>>,
+    evaluator: OnceLock<PointEvaluator>,
+}
+
+impl Radiosity {
+    /// Solves `scene` on the CPU as `settings` ask.
+    ///
+    /// # Errors
+    /// A scene where nothing emits light ([`InputError::NoEmission`]: its
+    /// solution is zero), settings out of range, a problem too large for
+    /// memory, a failed solve, [`Error::Cancelled`].
+    pub fn solve(scene: Scene, settings: &Settings) -> Result<Self, Error> {
+        Self::solve_on(scene, settings, &CpuBackend)
+    }
+
+    /// [`Radiosity::solve`] with the assembly on `backend` (radcol-gpu's
+    /// device backend, for one).
+    pub fn solve_on(
+        scene: Scene,
+        settings: &Settings,
+        backend: &dyn AssemblyBackend,
+    ) -> Result<Self, Error> {
+        let (config, adapt) = settings.configure(&scene);
+        Self::solve_with(scene, config, adapt.as_ref(), backend)
+    }
+
+    /// Solves `scene` with a configuration of one's own (every setting of
+    /// [`SolveConfig`]) and, when given, adaptive refinement.
+    pub fn solve_with(
+        scene: Scene,
+        config: SolveConfig,
+        adapt: Option<&AdaptOptions>,
+        backend: &dyn AssemblyBackend,
+    ) -> Result<Self, Error> {
+        let problem = scene.problem();
+        if !problem.emits() {
+            return Err(InputError::NoEmission.into());
+        }
+        let (outcome, refinement) = match adapt {
+            None => (solve(&problem, &config, backend)?, None),
+            Some(opts) => {
+                let res = solve_adaptive(&problem, &config, opts, backend, |_| {})?;
+                let refinement = Refinement {
+                    steps: res.steps,
+                    stop: res.stop,
+                };
+                (res.outcome, Some(refinement))
+            }
+        };
+        Ok(Self {
+            scene,
+            problem,
+            config,
+            outcome,
+            refinement,
+            relit: None,
+            evaluator: OnceLock::new(),
+        })
+    }
+
+    /// The scene, with its materials as last relit.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// Everything the solve produced: discretization, operator, timings,
+    /// pair statistics, and the channels as first solved.
+    pub fn outcome(&self) -> &SolveOutcome {
+        &self.outcome
+    }
+
+    /// The configuration solved with.
+    pub fn config(&self) -> &SolveConfig {
+        &self.config
+    }
+
+    /// The steps of an adaptive solve and why it stopped; None without a
+    /// target.
+    pub fn refinement(&self) -> Option<&Refinement> {
+        self.refinement.as_ref()
+    }
+
+    /// The colour channels (R, G, B) under the current lights: u_n, ∫u,
+    /// the solver's report and, until the first relight, the error estimate.
+    pub fn channels(&self) -> &[ChannelResult] {
+        self.relit.as_deref().unwrap_or(&self.outcome.channels)
+    }
+
+    /// What to show per channel: u_n made nonnegative where it had negative
+    /// values ([`ChannelResult::shown`]).
+    pub fn shown(&self) -> Vec<&Solution> {
+        self.channels().iter().map(ChannelResult::shown).collect()
+    }
+
+    /// u_n, û_n = E + ρ K u_n (the better value, eq. 21) and the estimated
+    /// error of u_n on the point's element, per channel, at `points` taken
+    /// onto the surface (within 1e-3 of the scene's diagonal; a normal picks
+    /// the face at an edge). After a relight the values are the new
+    /// lights' and the estimate is None.
+    pub fn query(&self, points: &[QueryPoint]) -> Result<Vec<PointValues>, Error> {
+        let eval = self.evaluator.get_or_init(|| {
+            PointEvaluator::new(
+                self.outcome.discretization.clone(),
+                self.config.quad.clone(),
+                &self.outcome.visibility,
+            )
+        });
+        Ok(eval.query(&self.problem, self.channels(), points, DEFAULT_SNAP)?)
+    }
+
+    /// Solves again with the materials named in `changes` given new
+    /// emission or reflectance, on the assembled operator (no assembly: a
+    /// linear solve per channel). Changes add up over calls. Nothing
+    /// changes when a name is unknown or a value out of range.
+    pub fn relight(&mut self, changes: &[(&str, MaterialChange)]) -> Result<(), Error> {
+        let mut scene = self.scene.clone();
+        for &(name, change) in changes {
+            scene.change_material(name, change)?;
+        }
+        let problem = scene.problem();
+        let channels = Relighter::new(&self.outcome, &self.config).solve(&problem)?;
+        self.scene = scene;
+        self.problem = problem;
+        self.relit = Some(channels);
+        Ok(())
+    }
+
+    /// The value of every channel at the three corners of every input
+    /// triangle (as read from the file or the builder), with the input's
+    /// vertex indices: colours for one's own copy of the mesh.
+    pub fn corner_values(&self) -> Result<Vec<CornerValues>, Error> {
+        Ok(corners::corner_values(
+            &self.scene,
+            self.outcome.discretization.mesh(),
+            &self.shown(),
+        )?)
+    }
+
+    /// The scene's triangles with the shown values at their corners, as
+    /// a mesh to write (PLY, glTF): corners split per triangle or shared
+    /// where position and normal agree.
+    pub fn input_vertex_mesh(&self, corners: Corners) -> Result<VertexMesh, Error> {
+        Ok(crate::render::input_vertex_mesh(
+            self.outcome.discretization.mesh(),
+            &self.shown(),
+            corners,
+        )?)
+    }
+
+    /// An image of the shown values from `camera` (None: the scene's own,
+    /// or one chosen to show its lit sides), with emitters marked so that
+    /// the exposure follows the reflected light.
+    pub fn render(&self, camera: Option<&Camera>, options: &RenderOptions) -> Result<Image, Error> {
+        let camera = camera
+            .copied()
+            .unwrap_or_else(|| self.scene.camera_or_auto());
+        let emits = self.outcome.emitting_elements();
+        Ok(render_scene(
+            self.outcome.discretization.mesh(),
+            &self.shown(),
+            &emits,
+            &camera,
+            options,
+        )?)
+    }
+}
+
+#[cfg(test)]
+mod tests;

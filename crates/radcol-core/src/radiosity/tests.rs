@@ -1,0 +1,258 @@
+use super::*;
+use crate::progress::Cancel;
+use crate::scene::builtin;
+use glam::DVec3;
+
+fn cornell() -> Scene {
+    builtin("cornell").expect("built in").expect("loads")
+}
+
+/// The Cornell box to a coarse target (50 elements, a quarter of a
+/// second): the identities below hold at any resolution.
+fn solved() -> Radiosity {
+    let settings = Settings {
+        target_error: Some(0.1),
+        ..Settings::default()
+    };
+    Radiosity::solve(cornell(), &settings).expect("solves")
+}
+
+/// The Cornell box's input triangles each cut into four elements.
+fn refined() -> Radiosity {
+    let scene = cornell();
+    let config = SolveConfig {
+        level: 1,
+        max_edge: None,
+        ..scene.solve_config(false)
+    };
+    Radiosity::solve_with(scene, config, None, &CpuBackend).expect("solves")
+}
+
+fn light_name(scene: &Scene) -> String {
+    let light = scene.materials.iter().find(|m| m.is_emitter()).unwrap();
+    light.name.clone()
+}
+
+#[test]
+fn a_solved_scene_can_live_in_an_application_and_cross_threads() {
+    fn owned<T: Send + Sync + 'static>() {}
+    owned::<Radiosity>();
+    owned::<Error>();
+}
+
+#[test]
+fn the_default_settings_are_the_commands() {
+    let scene = cornell();
+    let (config, adapt) = Settings::default().configure(&scene);
+    assert!(adapt.is_none());
+    let command = scene.solve_config(false);
+    assert_eq!(format!("{config:?}"), format!("{command:?}"));
+    let (config, adapt) = Settings {
+        target_error: Some(1e-2),
+        ..Settings::default()
+    }
+    .configure(&scene);
+    let adapt = adapt.expect("a target refines");
+    assert!(adapt.graded_start && adapt.target == 1e-2);
+    assert_eq!(config.degree, crate::run::ADAPTIVE_DEGREE);
+    assert_eq!((config.level, config.max_edge), (0, None));
+    let (config, adapt) = Settings {
+        target_error: Some(1e-2),
+        degree: Some(3),
+        progress: None,
+    }
+    .configure(&scene);
+    assert!(!adapt.unwrap().graded_start);
+    assert_eq!((config.degree, config.alpha), (3, auto_alpha(3)));
+}
+
+/// The system is linear in E: doubling the light doubles u_n and û_n at
+/// every point, switching it off leaves zero, and putting it back gives the
+/// first solve's values (to the solver's tolerance).
+#[test]
+fn relit_values_are_queried_like_the_first() {
+    let mut solved = solved();
+    let name = light_name(solved.scene());
+    let e = solved
+        .scene()
+        .materials
+        .iter()
+        .find(|m| m.name == name)
+        .unwrap()
+        .emission;
+    let points: Vec<QueryPoint> = [
+        DVec3::new(276.72, 0.0, 61.3),
+        DVec3::new(520.02, 0.0, 501.11),
+        DVec3::new(555.42, 448.64, 303.1),
+        DVec3::new(279.28, 548.8, 62.04),
+    ]
+    .map(|position| QueryPoint {
+        position,
+        normal: None,
+    })
+    .to_vec();
+    let first = solved.query(&points).unwrap();
+    assert!(first
+        .iter()
+        .all(|p| p.channels.iter().all(|c| c.estimate.is_some())));
+    let max_u = (solved.channels().iter())
+        .map(|c| {
+            c.solution
+                .nodal()
+                .iter()
+                .fold(0.0f64, |a, &b| a.max(b.abs()))
+        })
+        .fold(0.0, f64::max);
+
+    solved
+        .relight(&[(&name, MaterialChange::Emission(e.map(|x| 2.0 * x)))])
+        .unwrap();
+    let doubled = solved.query(&points).unwrap();
+    for (a, b) in first.iter().zip(&doubled) {
+        for (x, y) in a.channels.iter().zip(&b.channels) {
+            assert!((y.u - 2.0 * x.u).abs() <= 1e-8 * max_u, "{} {}", x.u, y.u);
+            assert!((y.iterated - 2.0 * x.iterated).abs() <= 1e-8 * max_u);
+            assert!(y.estimate.is_none());
+        }
+    }
+
+    solved
+        .relight(&[(&name, MaterialChange::Emission([0.0; 3]))])
+        .unwrap();
+    let dark = solved.query(&points).unwrap();
+    assert!(dark
+        .iter()
+        .all(|p| p.channels.iter().all(|c| c.u == 0.0 && c.iterated == 0.0)));
+
+    solved
+        .relight(&[(&name, MaterialChange::Emission(e))])
+        .unwrap();
+    let back = solved.query(&points).unwrap();
+    for (a, b) in first.iter().zip(&back) {
+        for (x, y) in a.channels.iter().zip(&b.channels) {
+            assert!((y.iterated - x.iterated).abs() <= 1e-8 * max_u);
+        }
+    }
+}
+
+#[test]
+fn a_bad_relight_changes_nothing() {
+    let mut solved = solved();
+    let before: Vec<f64> = solved.channels().iter().map(|c| c.integral_u).collect();
+    let name = light_name(solved.scene());
+    let err = solved
+        .relight(&[
+            (&name, MaterialChange::Emission([0.0; 3])),
+            ("no such", MaterialChange::Emission([1.0; 3])),
+        ])
+        .unwrap_err();
+    assert!(matches!(
+        err,
+        Error::Scene(crate::scene::SceneError::NoSuchMaterial { .. })
+    ));
+    let err = solved
+        .relight(&[(&name, MaterialChange::Reflectance([1.5, 0.5, 0.5]))])
+        .unwrap_err();
+    assert!(err.to_string().contains("Kd R = 1.5"), "{err}");
+    let after: Vec<f64> = solved.channels().iter().map(|c| c.integral_u).collect();
+    assert_eq!(before, after);
+    assert!(solved
+        .scene()
+        .materials
+        .iter()
+        .any(|m| m.name == name && m.is_emitter()));
+}
+
+/// Each input triangle's corner values are the shown solution at that
+/// corner, found the other way round: by locating a point a hair inside
+/// the triangle from the corner and evaluating there.
+#[test]
+fn corner_values_are_the_solution_at_the_input_corners() {
+    let solved = refined();
+    let corners = solved.corner_values().unwrap();
+    let scene = solved.scene();
+    assert_eq!(corners.len(), scene.triangle_count());
+    let origins: Vec<_> = scene.origins.iter().flatten().collect();
+    let mut points = Vec::new();
+    for cv in &corners {
+        let o = origins.iter().find(|o| o.input == cv.input).unwrap();
+        assert_eq!(o.vertices, cv.vertices);
+        let centre = (o.corners[0] + o.corners[1] + o.corners[2]) / 3.0;
+        let normal = (o.corners[1] - o.corners[0]).cross(o.corners[2] - o.corners[0]);
+        for c in o.corners {
+            points.push(QueryPoint {
+                position: c + 1e-7 * (centre - c),
+                normal: Some(normal),
+            });
+        }
+    }
+    // Located, not queried: û_n's row at a point next to a corner of the
+    // room is slow to integrate, and only the element and (s, t) are needed.
+    let mesh = solved.outcome().discretization.mesh();
+    let locator = crate::mesh::Locator::new(mesh);
+    let reach = 1e-6 * solved.scene().diagonal();
+    let located: Vec<_> = (points.iter())
+        .map(|q| {
+            locator
+                .nearest(mesh, q.position, q.normal, reach)
+                .expect("on S")
+        })
+        .collect();
+    let shown = solved.shown();
+    let max_u = (shown.iter())
+        .map(|s| s.nodal().iter().fold(0.0f64, |a, &b| a.max(b.abs())))
+        .fold(0.0, f64::max);
+    for (i, at) in located.iter().enumerate() {
+        let (cv, c) = (&corners[i / 3], i % 3);
+        for ch in 0..3 {
+            let want = shown[ch].eval(at.element, at.st[0], at.st[1]);
+            let got = f64::from(cv.values[c][ch]);
+            assert!(
+                (got - want).abs() <= 1e-5 * max_u,
+                "input triangle {}, corner {c}, channel {ch}: {got} against {want}",
+                cv.input
+            );
+        }
+    }
+}
+
+#[test]
+fn a_scene_without_light_is_refused_and_a_cancelled_solve_stops() {
+    let mut dark = cornell();
+    let name = light_name(&dark);
+    dark.change_material(&name, MaterialChange::Emission([0.0; 3]))
+        .unwrap();
+    let err = Radiosity::solve(dark, &Settings::default()).unwrap_err();
+    assert!(matches!(
+        err,
+        Error::Solve(crate::error::Error::Input(InputError::NoEmission))
+    ));
+
+    let cancel = Cancel::new();
+    cancel.cancel();
+    let settings = Settings {
+        progress: Some(cancel.handle()),
+        ..Settings::default()
+    };
+    let err = Radiosity::solve(cornell(), &settings).unwrap_err();
+    // Cancelled before the plan: nothing was assembled.
+    assert!(
+        matches!(err, Error::Solve(crate::error::Error::Cancelled { .. })),
+        "{err}"
+    );
+}
+
+#[test]
+fn an_image_shows_the_lit_room() {
+    let solved = solved();
+    let options = RenderOptions {
+        width: 24,
+        height: 18,
+        ..RenderOptions::default()
+    };
+    let image = solved.render(None, &options).unwrap();
+    let pixels = crate::render::tone_map(&image, &crate::render::ToneMap::default());
+    assert_eq!(pixels.len(), 24 * 18);
+    let lit = pixels.iter().filter(|p| p.iter().any(|&c| c > 0)).count();
+    assert!(lit > 24 * 18 / 2, "{lit} lit pixels");
+}
