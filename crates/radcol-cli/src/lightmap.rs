@@ -2,13 +2,13 @@
 //! the scene's triangles ([`radcol_core::render::lightmap`]), written as EXR
 //! (linear radiance) or PNG (tone-mapped), and the lightmapped glTF.
 
-use crate::export;
 use crate::files::create;
 use crate::objects::layout;
 use crate::progress::Bar;
 use crate::setup::Look;
 use crate::validate::{Output, OutputKind};
 use anyhow::{Context, Result};
+use radcol_core::export;
 use radcol_core::mesh::Mesh;
 use radcol_core::render::lightmap::{bake, Atlas, Resolution};
 use radcol_core::render::{tone_map, Image};

@@ -19,7 +19,7 @@
 mod args;
 mod backend;
 mod error;
-mod export;
+mod error_map;
 mod files;
 mod lightmap;
 mod objects;

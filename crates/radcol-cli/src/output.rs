@@ -1,7 +1,6 @@
 //! Files the CLI writes: the nodal CSV, images and vertex meshes, and the
 //! overwrite rule shared by every file.
 
-use crate::export;
 use crate::files::{create, Staged};
 use crate::lightmap;
 use crate::objects::layout;
@@ -10,6 +9,7 @@ use crate::report::Written;
 use crate::setup::Look;
 use crate::validate::{Output, OutputFile, OutputKind};
 use anyhow::{Context, Result};
+use radcol_core::export;
 use radcol_core::mesh::Mesh;
 use radcol_core::render::{self, Image, VertexMesh};
 use radcol_core::run::SolveOutcome;
@@ -160,11 +160,11 @@ fn write_error_map(o: &Output, look: &Look, out: &SolveOutcome, t: Instant) -> R
         &mut f,
         img.width,
         img.height,
-        &export::error_map::pixels(&img),
+        &crate::error_map::pixels(&img),
     )
     .with_context(|| format!("writing {path}"))?;
     f.commit()?;
-    let (lo, hi) = export::error_map::DECADES;
+    let (lo, hi) = crate::error_map::DECADES;
     Ok(Written {
         path,
         what: format!(

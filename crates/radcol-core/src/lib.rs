@@ -70,6 +70,8 @@ pub mod camera;
 pub mod discretization;
 pub mod error;
 pub mod estimate;
+#[cfg(feature = "export")]
+pub mod export;
 pub mod expr;
 pub mod geometry;
 pub mod hmatrix;
@@ -97,3 +99,8 @@ pub mod study;
 #[cfg(any(test, feature = "conformance"))]
 pub mod testing;
 pub mod visibility;
+
+/// The README's library example, compiled and run as a doctest.
+#[cfg(all(doctest, feature = "scenes", feature = "export"))]
+#[doc = include_str!("../../../README.md")]
+struct ReadmeExample;

@@ -48,6 +48,16 @@ pub struct QueryPoint {
     pub normal: Option<DVec3>,
 }
 
+impl QueryPoint {
+    /// The point `position`, on whichever face it lies.
+    pub fn at(position: DVec3) -> Self {
+        Self {
+            position,
+            normal: None,
+        }
+    }
+}
+
 /// One channel's values at a query point.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct ChannelValue {

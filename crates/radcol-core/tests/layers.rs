@@ -33,6 +33,7 @@ const LAYERS: &[&str] = &[
     "query",
     "study",
     "render",
+    "export",
     "scene",
     "radiosity",
     "prelude",

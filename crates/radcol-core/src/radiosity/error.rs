@@ -20,6 +20,10 @@ pub enum Error {
     /// A point query.
     #[error(transparent)]
     Query(#[from] QueryError),
+    /// Writing a file.
+    #[cfg(feature = "export")]
+    #[error(transparent)]
+    Export(#[from] crate::export::ExportError),
 }
 
 impl From<crate::error::InputError> for Error {

@@ -24,9 +24,13 @@
 
 mod corners;
 mod error;
+#[cfg(feature = "export")]
+mod write;
 
 pub use corners::CornerValues;
 pub use error::Error;
+#[cfg(feature = "export")]
+pub use write::MeshFormat;
 
 use crate::alpha0::auto_alpha;
 use crate::assembly::{AssemblyBackend, CpuBackend};
@@ -60,6 +64,23 @@ pub struct Settings {
 }
 
 impl Settings {
+    /// Adaptive refinement to `target_error` (relative to max |u|), the
+    /// rest as [`Settings::default`].
+    pub fn target(target_error: f64) -> Self {
+        Self {
+            target_error: Some(target_error),
+            ..Self::default()
+        }
+    }
+
+    /// These settings reporting to, and cancelled through, `progress`.
+    pub fn with_progress(self, progress: ProgressHandle) -> Self {
+        Self {
+            progress: Some(progress),
+            ..self
+        }
+    }
+
     /// The solve configuration and, with a target, the adaptive options
     /// these settings give on `scene`.
     pub fn configure(&self, scene: &Scene) -> (SolveConfig, Option<AdaptOptions>) {

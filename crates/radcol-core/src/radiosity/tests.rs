@@ -256,3 +256,53 @@ fn an_image_shows_the_lit_room() {
     let lit = pixels.iter().filter(|p| p.iter().any(|&c| c > 0)).count();
     assert!(lit > 24 * 18 / 2, "{lit} lit pixels");
 }
+
+/// The mesh written as GLB and read back by the gltf crate: every input
+/// triangle once, under one node per object of the input, inside the room.
+#[cfg(feature = "export")]
+#[test]
+fn the_written_mesh_is_the_input_mesh_with_its_objects() {
+    let solved = solved();
+    let mut glb = Vec::new();
+    let tone = crate::render::ToneMap::default();
+    solved.write_mesh(&mut glb, MeshFormat::Glb, &tone).unwrap();
+    let (doc, buffers, _) = gltf::import_slice(&glb).expect("a valid GLB");
+    let scene = solved.scene();
+    let (lo, hi) = scene.bounding_box();
+    let mut triangles = 0;
+    let mut names = Vec::new();
+    for node in doc.nodes() {
+        let Some(mesh) = node.mesh() else { continue };
+        names.push(node.name().unwrap_or_default().to_string());
+        for prim in mesh.primitives() {
+            let reader = prim.reader(|b| Some(&buffers[b.index()]));
+            triangles += reader.read_indices().unwrap().into_u32().count() / 3;
+            for p in reader.read_positions().unwrap() {
+                let p = DVec3::new(p[0].into(), p[1].into(), p[2].into());
+                assert!(p.cmpge(lo - 1e-3).all() && p.cmple(hi + 1e-3).all(), "{p}");
+            }
+            assert!(reader.read_colors(0).is_some());
+        }
+    }
+    assert_eq!(triangles, scene.triangle_count());
+    let groups: std::collections::BTreeSet<String> = (scene.surface.patches.iter())
+        .map(|p| p.name.split('/').next().unwrap().to_string())
+        .collect();
+    assert_eq!(
+        names
+            .iter()
+            .cloned()
+            .collect::<std::collections::BTreeSet<_>>(),
+        groups
+    );
+    assert!(names.len() > 1, "{names:?}");
+
+    let mut ply = Vec::new();
+    solved.write_mesh(&mut ply, MeshFormat::Ply, &tone).unwrap();
+    let header = String::from_utf8_lossy(&ply[..ply.len().min(600)]);
+    let faces = format!("element face {}", scene.triangle_count());
+    assert!(
+        header.starts_with("ply\n") && header.contains(&faces),
+        "{header}"
+    );
+}

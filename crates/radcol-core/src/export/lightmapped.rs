@@ -1,15 +1,15 @@
 //! glTF 2.0 with a lightmap: the scene's own triangles (not radcol's
 //! refinement) with TEXCOORD_0 into the lightmap atlas
-//! ([`radcol_core::render::lightmap`]), the atlas as an embedded PNG, and
+//! ([`crate::render::lightmap`]), the atlas as an embedded PNG, and
 //! one `KHR_materials_unlit` material whose base colour texture it is. One
 //! node and mesh per object under the scene's root, as [`super::gltf`]
 //! writes the vertex-colour mesh.
 
 use super::gltf::{embed_gltf, frame_glb, position_bounds, root_node, Layout};
-use anyhow::{bail, Result};
+use super::Result;
+use crate::geometry::Surface;
+use crate::render::lightmap::Atlas;
 use glam::DVec3;
-use radcol_core::geometry::Surface;
-use radcol_core::render::lightmap::Atlas;
 use serde_json::{json, Value};
 use std::io::Write;
 

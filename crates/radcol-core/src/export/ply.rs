@@ -3,8 +3,8 @@
 //! Vertices are written as the [`VertexMesh`] holds them: adjacent elements do
 //! not share vertices, so the per-element discontinuities of u_n survive.
 
-use anyhow::{bail, Context, Result};
-use radcol_core::render::{ToneMap, VertexMesh};
+use super::{Context, Result};
+use crate::render::{ToneMap, VertexMesh};
 use std::io::Write;
 
 /// The radiosity property names for `channel_names`: `radiosity` for one
@@ -96,9 +96,9 @@ pub fn write<W: Write>(
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::render::ToneOperator;
     use ply_rs_bw::parser::Parser;
     use ply_rs_bw::ply::{DefaultElement, Encoding, Property, PropertyType, ScalarType};
-    use radcol_core::render::ToneOperator;
 
     /// Two elements of one triangle each, sharing an edge in space but not vertices.
     pub(crate) fn tiny() -> VertexMesh {

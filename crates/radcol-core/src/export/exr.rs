@@ -1,8 +1,8 @@
 //! Linear float OpenEXR images: the rendered radiance before any tone mapping.
 
-use anyhow::{bail, Context, Result};
+use super::{Context, Result};
+use crate::render::Image;
 use exr::prelude::{Image as ExrImage, SpecificChannels, Vec2, WritableImage};
-use radcol_core::render::Image;
 use std::io::{Seek, Write};
 
 /// Writes the radiance of `image` as a single-layer RGB EXR with f32 channels

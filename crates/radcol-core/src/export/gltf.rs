@@ -19,10 +19,11 @@
 //! *linear* values in [0, 1]: the radiance tone-mapped as for images, without
 //! the sRGB encoding (glTF vertex colours are linear; viewers encode on output).
 
-use anyhow::{bail, Result};
+use super::{Context, Result};
+use crate::mesh::Mesh;
+use crate::render::{ToneMap, VertexMesh};
 use base64::engine::general_purpose::STANDARD;
 use base64::Engine;
-use radcol_core::render::{ToneMap, VertexMesh};
 use serde_json::{json, Value};
 use std::io::Write;
 
@@ -57,6 +58,41 @@ impl Layout {
             object_of_element: vec![0; elements],
             object_of_patch: Vec::new(),
         }
+    }
+}
+
+impl Layout {
+    /// The nodes of `mesh`'s scene: with `by_object`, one per object (a
+    /// patch name's group, the part before '/': an OBJ group, a glTF node of
+    /// the input), in the order they first appear; else one. `scene` names
+    /// the root node, scaled by `metres_per_unit`.
+    pub fn of_mesh(mesh: &Mesh, scene: &str, metres_per_unit: f64, by_object: bool) -> Self {
+        let mut layout = Self::single(scene, mesh.len());
+        layout.metres_per_unit = metres_per_unit;
+        let patches = &mesh.surface().patches;
+        if !by_object {
+            layout.object_of_patch = vec![0; patches.len()];
+            return layout;
+        }
+        layout.objects.clear();
+        let object_of_patch: Vec<u32> = patches
+            .iter()
+            .map(|p| {
+                let group = p.name.split('/').next().unwrap_or(&p.name).to_string();
+                match layout.objects.iter().position(|o| *o == group) {
+                    Some(i) => i as u32,
+                    None => {
+                        layout.objects.push(group);
+                        (layout.objects.len() - 1) as u32
+                    }
+                }
+            })
+            .collect();
+        layout.object_of_element = (mesh.elements().iter())
+            .map(|e| object_of_patch[e.patch as usize])
+            .collect();
+        layout.object_of_patch = object_of_patch;
+        layout
     }
 }
 
@@ -208,7 +244,7 @@ pub fn write_gltf<W: Write>(w: W, mesh: &VertexMesh, tm: &ToneMap, layout: &Layo
 /// A document and its buffer as GLB: 12-byte header, a JSON chunk padded
 /// with spaces and a BIN chunk padded with zeros, both to 4 bytes.
 pub(super) fn frame_glb<W: Write>(mut w: W, doc: &Value, mut bin: Vec<u8>) -> Result<()> {
-    let mut json = serde_json::to_vec(doc)?;
+    let mut json = serde_json::to_vec(doc).context("glTF: encoding the JSON")?;
     json.resize(json.len().next_multiple_of(4), b' ');
     bin.resize(bin.len().next_multiple_of(4), 0);
     let total = 12 + 8 + json.len() + 8 + bin.len();
@@ -225,8 +261,8 @@ pub(super) fn frame_glb<W: Write>(mut w: W, doc: &Value, mut bin: Vec<u8>) -> Re
     out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
     out.extend_from_slice(b"BIN\0");
     out.extend_from_slice(&bin);
-    w.write_all(&out)?;
-    w.flush()?;
+    w.write_all(&out).context("glTF: writing")?;
+    w.flush().context("glTF: writing")?;
     Ok(())
 }
 
@@ -237,9 +273,9 @@ pub(super) fn embed_gltf<W: Write>(mut w: W, mut doc: Value, bin: &[u8]) -> Resu
         "data:application/octet-stream;base64,{}",
         STANDARD.encode(bin)
     ));
-    serde_json::to_writer_pretty(&mut w, &doc)?;
-    w.write_all(b"\n")?;
-    w.flush()?;
+    serde_json::to_writer_pretty(&mut w, &doc).context("glTF: writing")?;
+    w.write_all(b"\n").context("glTF: writing")?;
+    w.flush().context("glTF: writing")?;
     Ok(())
 }
 
@@ -274,8 +310,8 @@ pub(super) fn root_node(layout: &Layout, children: usize) -> Result<Value> {
 mod tests {
     use super::*;
     use crate::export::ply::tests::tiny;
+    use crate::render::{srgb_decode, ToneOperator};
     use ::gltf::accessor::{DataType, Dimensions};
-    use radcol_core::render::{srgb_decode, ToneOperator};
 
     fn tm() -> ToneMap {
         ToneMap {
@@ -371,10 +407,10 @@ mod tests {
         // Vertex 1: radiosity (π, 0.5, 2) is radiance (1, 0.5/π, 2/π), clamped linearly.
         let want = [1.0, 0.5 / std::f64::consts::PI, 2.0 / std::f64::consts::PI];
         for k in 0..3 {
-            radcol_core::assert_close!(c[1][k] as f64, want[k], 1e-7);
+            crate::assert_close!(c[1][k] as f64, want[k], 1e-7);
         }
         // The PLY's 8-bit sRGB blue (209) decodes to the same linear colour to within a code.
-        radcol_core::assert_close!(srgb_decode(209.0 / 255.0), c[1][2] as f64, 0.005);
+        crate::assert_close!(srgb_decode(209.0 / 255.0), c[1][2] as f64, 0.005);
         let i: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
         assert_eq!(i, [0, 1, 2, 3, 4, 5]);
     }

@@ -1,6 +1,6 @@
 //! 8-bit sRGB PNG images.
 
-use anyhow::{bail, Context, Result};
+use super::{Context, Result};
 use std::io::Write;
 
 /// Writes `pixels` (sRGB-encoded, row-major, top row first) as an 8-bit RGB PNG

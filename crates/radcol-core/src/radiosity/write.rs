@@ -1,0 +1,47 @@
+//! A solved scene written as a mesh with its light: the input's triangles
+//! with the shown values at their corners, as PLY or glTF.
+
+use super::{Error, Radiosity};
+use crate::export::{gltf, ply};
+use crate::render::{Corners, ToneMap};
+use std::io::Write;
+
+/// The mesh formats [`Radiosity::write_mesh`] writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshFormat {
+    /// Binary PLY: positions, normals, sRGB colours and the raw radiosity
+    /// of each channel per vertex.
+    Ply,
+    /// One self-contained `.gltf` (its buffer embedded): one node per
+    /// object of the input, vertex colours (linear, tone-mapped), an unlit
+    /// material.
+    Gltf,
+    /// The same as binary glTF (`.glb`).
+    Glb,
+}
+
+impl Radiosity {
+    /// Writes the input's triangles with the shown values at their corners
+    /// (corners shared where position and normal agree) to `w` as `format`,
+    /// colours tone-mapped by `tone`. Positions keep the scene's units; a
+    /// glTF's root node scales them to metres when the scene says how.
+    pub fn write_mesh<W: Write>(
+        &self,
+        w: W,
+        format: MeshFormat,
+        tone: &ToneMap,
+    ) -> Result<(), Error> {
+        let mesh = self.outcome.discretization.mesh();
+        let vertices = self.input_vertex_mesh(Corners::Shared)?;
+        let layout = || {
+            let metres = self.scene.metres_per_unit.unwrap_or(1.0);
+            gltf::Layout::of_mesh(mesh, &self.scene.name, metres, true)
+        };
+        match format {
+            MeshFormat::Ply => ply::write(w, &vertices, &["R", "G", "B"], tone, None)?,
+            MeshFormat::Gltf => gltf::write_gltf(w, &vertices, tone, &layout())?,
+            MeshFormat::Glb => gltf::write_glb(w, &vertices, tone, &layout())?,
+        }
+        Ok(())
+    }
+}
