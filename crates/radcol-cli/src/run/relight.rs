@@ -12,7 +12,7 @@ use crate::setup::Setup;
 use anyhow::Result;
 use radcol_core::problem::{Field, Problem};
 use radcol_core::run::{Relighter, SolveOutcome, SolverReport};
-use radcol_core::scene::Scene;
+use radcol_core::scene::{MaterialChange, Scene, SceneError};
 use serde::Serialize;
 use std::fmt;
 use std::time::Instant;
@@ -93,11 +93,6 @@ fn scene_problem(spec: &str, scene: &Scene) -> Result<Problem> {
         };
         let (key, value) = a.split_once('=').ok_or_else(wrong)?;
         let key = key.trim();
-        let (name, reflectance) = match key.rsplit_once('.') {
-            Some((n, "Ke")) => (n, false),
-            Some((n, "Kd")) => (n, true),
-            _ => (key, false),
-        };
         let rgb: Vec<f64> = value
             .split(',')
             .map(|v| v.trim().parse::<f64>())
@@ -106,41 +101,27 @@ fn scene_problem(spec: &str, scene: &Scene) -> Result<Problem> {
         let [r, g, b] = rgb[..] else {
             return Err(wrong().into());
         };
-        let ok = |v: f64| {
-            if reflectance {
-                (0.0..1.0).contains(&v)
-            } else {
-                v.is_finite() && v >= 0.0
-            }
+        let (name, change) = match key.rsplit_once('.') {
+            Some((n, "Kd")) => (n, MaterialChange::Reflectance([r, g, b])),
+            Some((n, "Ke")) => (n, MaterialChange::Emission([r, g, b])),
+            _ => (key, MaterialChange::Emission([r, g, b])),
         };
-        if ![r, g, b].into_iter().all(ok) {
-            let range = if reflectance {
-                "Kd must lie in [0, 1)"
-            } else {
-                "Ke must be finite and ≥ 0"
-            };
-            return Err(bad_input(format!("--relight '{spec}': {range}")).into());
-        }
-        let names: Vec<&str> = scene.materials.iter().map(|m| m.name.as_str()).collect();
         // Every material of that name (a scene may hold two: its warnings say so).
-        let mut found = false;
-        for m in changed.materials.iter_mut().filter(|m| m.name == name) {
-            found = true;
-            if reflectance {
-                m.rho = [r, g, b];
-            } else {
-                m.emission = [r, g, b];
-            }
-        }
-        if !found {
-            return Err(bad_input(format!(
-                "--relight '{spec}': the scene has no material '{name}' (it has {})",
-                names.join(", ")
-            ))
-            .into());
-        }
+        changed
+            .change_material(name, change)
+            .map_err(|e| bad_input(format!("--relight '{spec}': {}", why(&e))))?;
     }
     Ok(changed.problem())
+}
+
+/// What is wrong with a material change, without the place the library
+/// names (the flag says it).
+fn why(e: &SceneError) -> String {
+    match e {
+        SceneError::Reflectance { .. } => "Kd must lie in [0, 1)".into(),
+        SceneError::Emission { .. } => "Ke must be finite and ≥ 0".into(),
+        other => other.to_string(),
+    }
 }
 
 /// Solves every problem on the matrix of `out`, timing each.
