@@ -408,6 +408,24 @@ mod tests {
             ..AdaptOptions::default()
         };
         assert_eq!(adapt, Some(target));
+        // The library's front door configures the same.
+        use radcol_core::radiosity::Settings;
+        for (args, settings) in [
+            (&["cornell"][..], Settings::default()),
+            (&["cornell", "--target-error", "1e-2"], Settings::target(1e-2)),
+            (
+                &["cornell", "--target-error", "1e-2", "--degree", "3"],
+                Settings {
+                    degree: Some(3),
+                    ..Settings::target(1e-2)
+                },
+            ),
+        ] {
+            let (cfg, adapt) = configured(args);
+            let (want, want_adapt) = settings.configure(&cornell);
+            same(&cfg, &want);
+            assert_eq!(adapt, want_adapt, "{args:?}");
+        }
     }
 
     #[test]
