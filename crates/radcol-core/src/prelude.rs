@@ -34,8 +34,10 @@ pub use crate::run::{
     solve, MemoryBudget, OperatorChoice, Relighter, SolveConfig, SolveOutcome, SolverKind,
     StartMesh,
 };
+#[cfg(feature = "gltf")]
+pub use crate::scene::load_gltf;
 pub use crate::scene::{
-    builtin, load_gltf, load_obj, Material, Scene, SceneBuilder, SceneError, TriangleOrigin,
+    builtin, load_obj, Material, Scene, SceneBuilder, SceneError, TriangleOrigin,
 };
 pub use crate::solution::Solution;
 /// The vector types of every position and normal (`DVec3`), re-exported so
@@ -58,7 +60,17 @@ pub fn load_scene(path: &Path) -> Result<Scene, Error> {
         .map(str::to_ascii_lowercase);
     Ok(match ext.as_deref() {
         Some("obj") => load_obj(path)?,
+        #[cfg(feature = "gltf")]
         Some("gltf" | "glb") => load_gltf(path)?,
+        #[cfg(not(feature = "gltf"))]
+        Some("gltf" | "glb") => {
+            return Err(SceneError::Gltf {
+                path: path.to_path_buf(),
+                message: "this build of radcol-core reads no glTF (its feature `gltf` is off)"
+                    .into(),
+            }
+            .into())
+        }
         _ => {
             return Err(SceneError::Unreadable {
                 path: path.to_path_buf(),

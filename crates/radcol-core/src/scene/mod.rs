@@ -31,7 +31,9 @@ mod builder;
 mod builtin;
 mod change;
 mod facing;
+#[cfg(feature = "gltf")]
 mod gltf;
+#[cfg(feature = "gltf")]
 mod gltf_data;
 mod ignored;
 pub mod imprint;
@@ -47,6 +49,7 @@ mod validate;
 pub use builder::SceneBuilder;
 pub use builtin::{builtin, BUILTIN_SCENES};
 pub use change::MaterialChange;
+#[cfg(feature = "gltf")]
 pub use gltf::load_gltf;
 pub use imprint::Imprinted;
 pub use obj::{load_obj, load_obj_str};
