@@ -412,7 +412,10 @@ mod tests {
         use radcol_core::radiosity::Settings;
         for (args, settings) in [
             (&["cornell"][..], Settings::default()),
-            (&["cornell", "--target-error", "1e-2"], Settings::target(1e-2)),
+            (
+                &["cornell", "--target-error", "1e-2"],
+                Settings::target(1e-2),
+            ),
             (
                 &["cornell", "--target-error", "1e-2", "--degree", "3"],
                 Settings {

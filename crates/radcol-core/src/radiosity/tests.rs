@@ -306,3 +306,40 @@ fn the_written_mesh_is_the_input_mesh_with_its_objects() {
         "{header}"
     );
 }
+
+/// A written .gltf (its buffer a base64 data URI) loads again as a scene
+/// with the same triangles and bounding box.
+#[cfg(all(feature = "export", feature = "gltf"))]
+#[test]
+fn a_written_gltf_loads_again() {
+    let solved = solved();
+    let dir = std::env::temp_dir().join(format!("radcol-written-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("cornell.gltf");
+    let tone = crate::render::ToneMap::default();
+    let mut written = Vec::new();
+    solved
+        .write_mesh(&mut written, MeshFormat::Gltf, &tone)
+        .unwrap();
+    // Its unlit white (a base colour of 1) is no reflectance a scene may
+    // have: read it as grey.
+    let mut doc: serde_json::Value = serde_json::from_slice(&written).unwrap();
+    doc["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] =
+        serde_json::json!([0.5, 0.5, 0.5, 1.0]);
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let again = crate::scene::load_gltf(&path).expect("loads");
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(again.triangle_count(), solved.scene().triangle_count());
+    // The root node scales scene units to metres, and the reader applies it.
+    let m = solved.scene().metres_per_unit.unwrap_or(1.0);
+    let (a, b) = (again.bounding_box(), solved.scene().bounding_box());
+    let tol = 1e-6 * solved.scene().diagonal() * m;
+    assert!(
+        (a.0 - m * b.0).abs().max_element() < tol,
+        "{a:?} {b:?} × {m}"
+    );
+    assert!(
+        (a.1 - m * b.1).abs().max_element() < tol,
+        "{a:?} {b:?} × {m}"
+    );
+}

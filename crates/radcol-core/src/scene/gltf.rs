@@ -64,7 +64,7 @@ pub fn load_gltf(path: &Path) -> Result<Scene, SceneError> {
 /// What the walk gathers besides the builder's triangles.
 struct Walk<'a> {
     file: &'a str,
-    buffers: &'a [gltf::buffer::Data],
+    buffers: &'a [Vec<u8>],
     builder: SceneBuilder,
     /// radcol material index per glTF material index.
     materials: Vec<Option<usize>>,
@@ -76,7 +76,7 @@ fn build(
     name: &str,
     file: &str,
     doc: &gltf::Document,
-    buffers: &[gltf::buffer::Data],
+    buffers: &[Vec<u8>],
 ) -> Result<Scene, SceneError> {
     let syntax = |message: String| SceneError::Syntax {
         at: file.to_string(),
@@ -222,7 +222,7 @@ impl Walk<'_> {
                 prim.morph_targets().len()
             ));
         }
-        let reader = prim.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
+        let reader = prim.reader(|b| self.buffers.get(b.index()).map(Vec::as_slice));
         let positions: Vec<DVec3> = reader
             .read_positions()
             .ok_or_else(|| SceneError::Syntax {

@@ -15,7 +15,7 @@ pub(super) fn read_buffers(
     doc: &gltf::Document,
     path: &Path,
     mut blob: Option<Vec<u8>>,
-) -> Result<Vec<gltf::buffer::Data>, String> {
+) -> Result<Vec<Vec<u8>>, String> {
     use std::io::Read;
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
     let dir = std::fs::canonicalize(dir.unwrap_or(Path::new("."))).map_err(|e| e.to_string())?;
@@ -28,10 +28,7 @@ pub(super) fn read_buffers(
                 .take()
                 .ok_or_else(|| bad("the GLB has no binary chunk".into()))?,
             gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
-                let source = gltf::buffer::Source::Uri(uri);
-                gltf::buffer::Data::from_source(source, None)
-                    .map_err(|e| bad(e.to_string()))?
-                    .0
+                data_uri(uri).map_err(&bad)?
             }
             gltf::buffer::Source::Uri(uri) => {
                 let file = buffer_file(uri, &dir).map_err(&bad)?;
@@ -51,9 +48,25 @@ pub(super) fn read_buffers(
         while data.len() % 4 != 0 {
             data.push(0);
         }
-        out.push(gltf::buffer::Data(data));
+        out.push(data);
     }
     Ok(out)
+}
+
+/// The bytes of a base64 `data:` URI (the only kind glTF allows for
+/// buffers: `data:application/octet-stream;base64,…`).
+fn data_uri(uri: &str) -> Result<Vec<u8>, String> {
+    use base64::Engine;
+    let head = |u: &str| u.chars().take(48).collect::<String>();
+    let (meta, payload) = uri
+        .split_once(',')
+        .ok_or_else(|| format!("data URI {:?}… has no ','", head(uri)))?;
+    if !meta.ends_with(";base64") {
+        return Err(format!("data URI {:?}… is not base64", head(uri)));
+    }
+    base64::engine::general_purpose::STANDARD
+        .decode(payload)
+        .map_err(|e| format!("data URI: {e}"))
 }
 
 /// The regular file inside the scene's directory `dir` (canonical) that
@@ -92,7 +105,7 @@ fn buffer_file(uri: &str, dir: &Path) -> Result<std::path::PathBuf, String> {
 /// and elements past the end of their view or of its buffer.
 pub(super) fn check_accessors(
     prim: &gltf::Primitive,
-    buffers: &[gltf::buffer::Data],
+    buffers: &[Vec<u8>],
     at: &str,
 ) -> Result<(), SceneError> {
     use gltf::accessor::{DataType, Dimensions};
@@ -155,7 +168,7 @@ pub(super) fn check_accessors(
                 view.length()
             )));
         }
-        let held = buffers.get(view.buffer().index()).map_or(0, |d| d.0.len());
+        let held = buffers.get(view.buffer().index()).map_or(0, Vec::len);
         if view.offset() + view.length() > held {
             return Err(bad(format!(
                 "buffer view {} runs to byte {} of buffer {}, which holds {held}",
@@ -166,4 +179,22 @@ pub(super) fn check_accessors(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::data_uri;
+
+    #[test]
+    fn data_uris_are_base64_or_refused() {
+        let ok = data_uri("data:application/octet-stream;base64,AAEC/w==");
+        assert_eq!(ok.unwrap(), vec![0, 1, 2, 255]);
+        let gltf_buffer = data_uri("data:application/gltf-buffer;base64,AAEC");
+        assert_eq!(gltf_buffer.unwrap(), vec![0, 1, 2]);
+        assert!(data_uri("data:application/octet-stream,abc")
+            .unwrap_err()
+            .contains("not base64"));
+        assert!(data_uri("data:application/octet-stream;base64").is_err());
+        assert!(data_uri("data:;base64,!!!!").is_err());
+    }
 }
