@@ -260,3 +260,65 @@ fn values_in_the_shadow_family_lie_within_the_estimate() {
         );
     }
 }
+
+/// A closed box with ρ = 1/2 and E = 1 has u ≡ 2 (its rows of K sum to 1,
+/// every point seeing the whole room). At points on its edges and corners,
+/// each asked from every face that meets there (the normal names it), û_n
+/// is that limit, 2, where it used to miss the faces seen edge-on (1.5 on
+/// an edge, 1.25 at a corner); and u_n is 2 there too.
+#[test]
+fn edges_and_corners_of_a_closed_room_give_the_limit_from_their_face() {
+    let (lx, ly, lz) = (1.0, 2.0, 1.5);
+    let surface = Arc::new(box_room(lx, ly, lz));
+    let problem = Problem::new(surface, Field::Constant(0.5), Field::Constant(1.0));
+    let cfg = config(1, 1);
+    let out = solve(&problem, &cfg, &CpuBackend).unwrap();
+    // Inner normals of the six walls.
+    let faces = [
+        DVec3::Z,
+        -DVec3::Z,
+        DVec3::Y,
+        -DVec3::Y,
+        DVec3::X,
+        -DVec3::X,
+    ];
+    let on = |n: DVec3, p: DVec3| {
+        let (lo, hi) = (0.0, n.abs().dot(DVec3::new(lx, ly, lz)));
+        let coord = n.abs().dot(p);
+        (coord - if n.max_element() > 0.0 { lo } else { hi }).abs() < 1e-12
+    };
+    let mut points = Vec::new();
+    let corners = [0.0, 1.0];
+    let mids = [0.0, 0.5, 1.0];
+    for x in mids {
+        for y in mids {
+            for z in mids {
+                let p = DVec3::new(x * lx, y * ly, z * lz);
+                let ends = [x, y, z].iter().filter(|v| corners.contains(v)).count();
+                if ends < 2 {
+                    continue; // not on an edge
+                }
+                for n in faces.iter().filter(|&&n| on(n, p)) {
+                    points.push(QueryPoint {
+                        position: p,
+                        normal: Some(*n),
+                    });
+                }
+            }
+        }
+    }
+    // 12 edge midpoints × 2 faces + 8 corners × 3 faces.
+    assert_eq!(points.len(), 12 * 2 + 8 * 3);
+    let values = query(&problem, &out, cfg.quad.clone(), &points, DEFAULT_SNAP).unwrap();
+    for (q, v) in points.iter().zip(&values) {
+        let c = v.channels[0];
+        assert!(
+            (c.iterated - 2.0).abs() < 1e-7 && (c.u - 2.0).abs() < 1e-7,
+            "at {} from the face {}: û_n = {}, u_n = {}",
+            q.position,
+            q.normal.unwrap(),
+            c.iterated,
+            c.u
+        );
+    }
+}

@@ -20,6 +20,8 @@
 //! (superconvergent) order at every point, where u_n converges at the
 //! global order (`tests/tests/query.rs`).
 
+mod edge;
+
 use crate::assembly::{ElementIntegrator, FieldPoint, QuadratureOptions};
 use crate::discretization::Discretization;
 use crate::mesh::{Located, Locator};
@@ -184,6 +186,14 @@ impl PointEvaluator {
             let p = at.position;
             let (c, rad) = mesh.bounding_ball(k);
             let tol = 1e-12 * (rad + (p - c).length());
+            if (p - verts[0]).dot(nk).abs() <= 1e-9 * rad {
+                // P in Δ_k's plane: G = 0 there, but its limit from P's
+                // face is not where Δ_k touches P (an edge of a room).
+                let basis =
+                    |st: [f64; 2], out: &mut [f64]| disc.nodes_of(k).eval_basis(st[0], st[1], out);
+                edge::add_edge_limit(mesh, at, k, 1e-9 * rad, &basis, out);
+                continue;
+            }
             let side = verts.map(|v| (v - p).dot(at.normal));
             let behind_k = (p - verts[0]).dot(nk) <= tol;
             if behind_k || side.iter().all(|&d| d <= tol) {
