@@ -5,7 +5,7 @@ use radcol_core::prelude::*;
 use std::{fs::File, io::BufWriter, thread, time::Duration};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let cornell = || builtin("cornell").expect("a built-in scene");
+    let cornell = || Scene::builtin("cornell");
     let mut solved = Radiosity::solve(cornell()?, &Settings::target(1e-2))?;
     let unknowns = solved.outcome().discretization.len();
     println!(

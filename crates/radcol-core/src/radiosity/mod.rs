@@ -7,7 +7,7 @@
 //! ```
 //! use radcol_core::prelude::*;
 //!
-//! let scene = builtin("cornell").expect("a built-in scene")?;
+//! let scene = Scene::builtin("cornell")?;
 //! let settings = Settings { target_error: Some(5e-2), ..Settings::default() };
 //! let mut solved = Radiosity::solve(scene, &settings)?;
 //! let floor = [QueryPoint { position: DVec3::new(278.0, 0.0, 280.0), normal: None }];

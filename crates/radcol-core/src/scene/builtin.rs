@@ -29,6 +29,20 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
     ),
 ];
 
+impl Scene {
+    /// The built-in scene `name` (see [`BUILTIN_SCENES`]); an unknown name
+    /// is [`SceneError::NoSuchBuiltin`], listing the names there are.
+    pub fn builtin(name: &str) -> Result<Scene, SceneError> {
+        builtin(name).unwrap_or_else(|| {
+            let known: Vec<&str> = BUILTIN_SCENES.iter().map(|(n, _)| *n).collect();
+            Err(SceneError::NoSuchBuiltin {
+                name: name.into(),
+                known: known.join(", "),
+            })
+        })
+    }
+}
+
 /// The built-in scene `name` (see [`BUILTIN_SCENES`]), or None when there is
 /// none of that name.
 pub fn builtin(name: &str) -> Option<Result<Scene, SceneError>> {

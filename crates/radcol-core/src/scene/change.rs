@@ -58,6 +58,16 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_builtin_by_an_unknown_name_lists_the_known_ones() {
+        let err = Scene::builtin("cornel").unwrap_err().to_string();
+        assert!(
+            err.contains("'cornel'") && err.contains("cornell, "),
+            "{err}"
+        );
+        assert_eq!(Scene::builtin("plates").unwrap().name, "plates");
+    }
+
+    #[test]
     fn a_change_reaches_every_material_of_its_name_or_none() {
         let mut scene = super::super::builtin("cornell")
             .expect("built in")

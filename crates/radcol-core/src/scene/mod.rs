@@ -167,6 +167,14 @@ pub enum SceneError {
         /// The material.
         material: String,
     },
+    /// A built-in scene asked for by a name there is none of.
+    #[error("there is no built-in scene '{name}' (there are {known})")]
+    NoSuchBuiltin {
+        /// The name asked for.
+        name: String,
+        /// The built-in scenes' names, comma-separated.
+        known: String,
+    },
     /// A material asked for by name that the scene does not have.
     #[error("the scene has no material '{name}' (it has {known})")]
     NoSuchMaterial {
