@@ -128,7 +128,7 @@ impl Radiosity {
     /// # Errors
     /// A scene where nothing emits light ([`InputError::NoEmission`]: its
     /// solution is zero), settings out of range, a problem too large for
-    /// memory, a failed solve, [`Error::Cancelled`].
+    /// memory, a failed solve, [`crate::error::Error::Cancelled`].
     pub fn solve(scene: Scene, settings: &Settings) -> Result<Self, Error> {
         Self::solve_on(scene, settings, &CpuBackend)
     }
