@@ -11,6 +11,26 @@ use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::Mutex;
+
+/// The temporary files being written, for [`remove_pending`].
+static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Removes every temporary output file still being written: what a signal
+/// that ends the process does first (`main`), so that an interrupted run
+/// leaves no hidden file beside its outputs.
+pub fn remove_pending() {
+    let pending = PENDING.lock().unwrap_or_else(|e| e.into_inner());
+    for path in pending.iter() {
+        let _ = std::fs::remove_file(path);
+    }
+}
+
+/// `path` is no longer being written.
+fn settled(path: &Path) {
+    let mut pending = PENDING.lock().unwrap_or_else(|e| e.into_inner());
+    pending.retain(|p| p != path);
+}
 
 /// An output being written under a temporary name.
 pub struct Staged {
@@ -57,11 +77,17 @@ pub fn create(file: &OutputFile) -> Result<Staged> {
         false => file.path.clone(),
     };
     let temporary = temporary(&target);
+    // Listed before it exists: a signal between the two finds nothing to remove.
+    PENDING
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .push(temporary.clone());
     let f = OpenOptions::new()
         .write(true)
         .create_new(true)
         .open(&temporary)
-        .with_context(|| format!("cannot create {}", file.path.display()))?;
+        .with_context(|| format!("cannot create {}", file.path.display()))
+        .inspect_err(|_| settled(&temporary))?;
     Ok(Staged {
         writer: Some(BufWriter::new(f)),
         temporary,
@@ -84,6 +110,7 @@ impl Staged {
         if moved.is_err() {
             let _ = std::fs::remove_file(&self.temporary);
         }
+        settled(&self.temporary);
         moved
     }
 
@@ -128,6 +155,7 @@ impl Drop for Staged {
     fn drop(&mut self) {
         if self.writer.take().is_some() {
             let _ = std::fs::remove_file(&self.temporary);
+            settled(&self.temporary);
         }
     }
 }
@@ -145,5 +173,39 @@ impl Write for Staged {
 impl Seek for Staged {
     fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
         self.writer().seek(pos)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What the signal handler does: the temporary file of an output being
+    /// written goes, the final name stays absent; a committed output is
+    /// no longer pending and stays.
+    #[test]
+    fn an_interrupted_write_leaves_no_temporary_file() {
+        let dir = std::env::temp_dir().join(format!("radcol-pending-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = |name: &str| OutputFile {
+            path: dir.join(name),
+            force: false,
+            flag: "--out",
+        };
+        let mut done = create(&file("done.txt")).unwrap();
+        done.write_all(b"whole").unwrap();
+        done.commit().unwrap();
+        let mut half = create(&file("half.txt")).unwrap();
+        half.write_all(b"ha").unwrap();
+        let temporary = half.temporary.clone();
+        assert!(temporary.exists());
+        remove_pending();
+        assert!(!temporary.exists());
+        assert!(!dir.join("half.txt").exists());
+        assert_eq!(std::fs::read(dir.join("done.txt")).unwrap(), b"whole");
+        drop(half);
+        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().flatten().collect();
+        assert_eq!(left.len(), 1, "{left:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

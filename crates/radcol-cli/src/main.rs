@@ -46,6 +46,13 @@ fn main() -> ExitCode {
     // A panic is a bug, but the user still gets one line and an exit code
     // (and Rust's backtrace first when RUST_BACKTRACE asks for it).
     panics::install();
+    // Ctrl-C, SIGTERM, SIGHUP: no half-written output is left behind, and
+    // the exit code says how the run ended (128 + SIGINT's 2).
+    let _ = ctrlc::set_handler(|| {
+        files::remove_pending();
+        eprintln!("\ninterrupted: no output was left half-written");
+        std::process::exit(130);
+    });
     let outcome = std::panic::catch_unwind(try_main);
     let err = match outcome {
         Ok(Ok(())) => return ExitCode::SUCCESS,

@@ -1236,3 +1236,36 @@ fn outputs_never_take_an_inputs_place() {
         .collect();
     assert!(left.is_empty(), "temporary files left: {left:?}");
 }
+
+/// Ctrl-C (SIGINT) in the middle of a solve ends the run with exit code
+/// 130 and a line saying so, and leaves no file: neither the output nor a
+/// hidden temporary one (what a signal during a write would leave is
+/// removed by the same handler: `files::tests`).
+#[cfg(unix)]
+#[test]
+fn an_interrupted_run_says_so_and_leaves_no_file() {
+    let dir = scratch("interrupted");
+    let out = dir.join("c.png");
+    let mut child = Command::new(radcol_bin())
+        .args(["solve", "cornell", "--max-edge", "25", "--out"])
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("radcol starts");
+    // Long enough to be inside the solve (this one takes minutes).
+    std::thread::sleep(Duration::from_millis(1500));
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(killed.success());
+    let started = Instant::now();
+    let output = child.wait_with_output().expect("radcol ends");
+    assert!(started.elapsed() < Duration::from_secs(10));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(130), "{stderr}");
+    assert!(stderr.contains("interrupted"), "{stderr}");
+    let left: Vec<_> = std::fs::read_dir(&dir).unwrap().flatten().collect();
+    assert!(left.is_empty(), "{left:?}");
+}
