@@ -1246,7 +1246,7 @@ fn outputs_never_take_an_inputs_place() {
 fn an_interrupted_run_says_so_and_leaves_no_file() {
     let dir = scratch("interrupted");
     let out = dir.join("c.png");
-    let mut child = Command::new(radcol_bin())
+    let child = Command::new(radcol_bin())
         .args(["solve", "cornell", "--max-edge", "25", "--out"])
         .arg(&out)
         .stdout(Stdio::null())
