@@ -56,6 +56,11 @@ impl<'a> Capped<'a> {
         }
         self.count += 1;
     }
+
+    /// Counts `n` more warnings without listing them.
+    pub(crate) fn count_more(&mut self, n: usize) {
+        self.count += n;
+    }
 }
 
 impl Drop for Capped<'_> {

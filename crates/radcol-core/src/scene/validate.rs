@@ -2,7 +2,7 @@
 //! (file:line or group/face) become a [`Scene`], or a [`SceneError`].
 
 use super::raw::{Capped, RawScene, RawTriangle};
-use super::{Material, Scene, SceneError};
+use super::{Material, Scene, SceneError, MAX_WARNINGS_PER_KIND};
 use crate::geometry::{Identity, Patch, Surface};
 use crate::visibility::is_convex_enclosure;
 use glam::DVec3;
@@ -223,7 +223,9 @@ fn drop_degenerate_and_duplicates(
     let mut degenerate = 0;
     {
         let mut deg = Capped::new(warnings, "degenerate-triangle");
-        let mut dup_list = Vec::new();
+        // Listed after the degenerate ones; only as many as are listed are
+        // formatted (33 M copies of one triangle held 33 M messages).
+        let (mut dup_list, mut dup_more) = (Vec::new(), 0);
         for t in triangles {
             if let Some(why) = degenerate_why(t.vertices) {
                 deg.push(format!("{}: degenerate triangle ({why}) dropped", t.at));
@@ -231,6 +233,11 @@ fn drop_degenerate_and_duplicates(
                 continue;
             }
             match seen.entry(oriented_key(&t.vertices)) {
+                std::collections::hash_map::Entry::Occupied(_)
+                    if dup_list.len() >= MAX_WARNINGS_PER_KIND =>
+                {
+                    dup_more += 1;
+                }
                 std::collections::hash_map::Entry::Occupied(e) => {
                     dup_list.push(format!(
                         "{}: duplicate of the triangle at {} (same vertices, same orientation) dropped",
@@ -249,6 +256,7 @@ fn drop_degenerate_and_duplicates(
         for m in dup_list {
             dup.push(m);
         }
+        dup.count_more(dup_more);
     }
     (kept, degenerate)
 }
