@@ -322,3 +322,50 @@ fn edges_and_corners_of_a_closed_room_give_the_limit_from_their_face() {
         );
     }
 }
+
+/// The estimate of û_n covers its error at every point: on the sphere
+/// (closed form) and the ellipsoid (manufactured u), r = 1, three levels,
+/// 60 points each. It is ρ(P) times P's view-weighted mean of the element
+/// estimates, so it is also below u_n's own estimate on average (û_n being
+/// the better value).
+#[test]
+fn the_estimate_of_the_iterated_value_covers_its_error() {
+    let sphere = radcol_tests::sphere_closed_form();
+    let ellipsoid = radcol_tests::ellipsoid_manufactured();
+    let on_ellipsoid = |q: QueryPoint| QueryPoint {
+        position: q.position * DVec3::new(1.0, 1.3, 0.8),
+        normal: None,
+    };
+    let cases = [
+        ("sphere", &sphere, sphere_points(60)),
+        (
+            "ellipsoid",
+            &ellipsoid,
+            sphere_points(60).into_iter().map(on_ellipsoid).collect(),
+        ),
+    ];
+    for (name, problem, pts) in cases {
+        let exact = problem.exact.clone().expect("closed form");
+        for level in 1..=3 {
+            let cfg = config(1, level);
+            let out = solve(problem, &cfg, &CpuBackend).expect("solves");
+            let values = query(problem, &out, cfg.quad.clone(), &pts, DEFAULT_SNAP).unwrap();
+            let mesh = out.discretization.mesh();
+            let (mut worst, mut mean_ratio) = (0.0f64, 0.0);
+            for v in &values {
+                let [s, t] = v.located.st;
+                let u = exact.eval(&mesh.site(v.located.element, s, t));
+                let c = &v.channels[0];
+                let est = c.iterated_estimate.expect("estimated");
+                worst = worst.max((c.iterated - u).abs() / est);
+                mean_ratio += est / c.estimate.unwrap() / pts.len() as f64;
+            }
+            println!(
+                "{name}, level {level}: max |û_n - u| / its estimate {worst:.3}; \
+                 its estimate / u_n's, mean {mean_ratio:.3}"
+            );
+            assert!(worst <= 1.0, "{name}, level {level}: {worst:.3}");
+            assert!(mean_ratio < 1.0, "{name}, level {level}: {mean_ratio:.3}");
+        }
+    }
+}

@@ -2001,6 +2001,8 @@ fn at_points_gives_u_n_and_the_iterated_solution() {
         worst_u = worst_u.max((num(ch, "u") - u).abs());
         worst_it = worst_it.max((num(ch, "iterated") - u).abs());
         assert!(num(ch, "estimate") > 0.0);
+        // û_n's estimate covers its error.
+        assert!((num(ch, "iterated") - u).abs() <= num(ch, "iterated_estimate"));
         assert!(num(v, "distance") < 1e-12);
     }
     assert!(
@@ -2017,7 +2019,10 @@ fn at_points_gives_u_n_and_the_iterated_solution() {
     let out = run(&["--at-out", csv.to_str().unwrap()]);
     let written = std::fs::read_to_string(&csv).unwrap();
     let rows: Vec<&str> = written.lines().collect();
-    assert_eq!(rows[0], "label,x,y,z,element,distance,u,uhat,estimate");
+    assert_eq!(
+        rows[0],
+        "label,x,y,z,element,distance,u,uhat,estimate,uhat_estimate"
+    );
     assert_eq!(rows.len(), 4);
     assert!(String::from_utf8_lossy(&out.stdout).contains("wrote the point values to"));
     let v = args(&["--at-out", csv.to_str().unwrap()]);

@@ -1,4 +1,4 @@
-//! The `--at` part of the solve report: u_n, û_n and the element estimate
+//! The `--at` part of the solve report: u_n, û_n and their estimates
 //! at each point.
 
 use super::{sci, secs};
@@ -16,6 +16,8 @@ pub struct PointChannel {
     pub iterated: f64,
     /// Estimated max error of u_n on the point's element, when estimated.
     pub estimate: Option<f64>,
+    /// Estimated error of û_n at the point, when estimated.
+    pub iterated_estimate: Option<f64>,
 }
 
 /// One point.
@@ -57,8 +59,8 @@ impl fmt::Display for PointsReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
-            "  points      {} from {} (moved onto the surface by at most {}), {}: u_n, \
-             û_n = E + K u_n and the element's estimated error of u_n",
+            "  points      {} from {} (moved onto the surface by at most {}), {}: u_n with \
+             its element's estimated error, û_n = E + K u_n with its own",
             self.points.len(),
             self.source,
             sci(self.max_distance),
@@ -79,8 +81,8 @@ impl fmt::Display for PointsReport {
             .clamp(8, 40);
         writeln!(
             f,
-            "    {:<width$} {:>7} {:>13} {:>13} {:>10}",
-            "point", "channel", "u_n", "û_n", "estimate"
+            "    {:<width$} {:>7} {:>13} {:>10} {:>13} {:>10}",
+            "point", "channel", "u_n", "estimate", "û_n", "estimate"
         )?;
         for p in &self.points {
             let name = p
@@ -91,12 +93,13 @@ impl fmt::Display for PointsReport {
             for (i, c) in p.channels.iter().enumerate() {
                 writeln!(
                     f,
-                    "    {:<width$} {:>7} {:>13.6e} {:>13.6e} {:>10}",
+                    "    {:<width$} {:>7} {:>13.6e} {:>10} {:>13.6e} {:>10}",
                     if i == 0 { name.as_str() } else { "" },
                     c.name,
                     c.u,
+                    c.estimate.map_or("-".to_string(), sci),
                     c.iterated,
-                    c.estimate.map_or("-".to_string(), sci)
+                    c.iterated_estimate.map_or("-".to_string(), sci)
                 )?;
             }
         }

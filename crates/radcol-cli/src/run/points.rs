@@ -89,6 +89,7 @@ pub fn evaluate(spec: &PointsSpec, s: &Setup, out: &SolveOutcome) -> Result<Poin
                     u: c.u,
                     iterated: c.iterated,
                     estimate: c.estimate,
+                    iterated_estimate: c.iterated_estimate,
                 })
                 .collect(),
         })
@@ -125,7 +126,7 @@ fn write_csv(w: &mut dyn Write, lines: &[PointLine]) -> Result<()> {
         .map(|s| s.to_string())
         .collect();
     for c in &first.channels {
-        for what in ["u", "uhat", "estimate"] {
+        for what in ["u", "uhat", "estimate", "uhat_estimate"] {
             header.push(if single {
                 what.to_string()
             } else {
@@ -149,6 +150,10 @@ fn write_csv(w: &mut dyn Write, lines: &[PointLine]) -> Result<()> {
             row.push(format!("{:e}", c.u));
             row.push(format!("{:e}", c.iterated));
             row.push(c.estimate.map_or(String::new(), |e| format!("{e:e}")));
+            row.push(
+                c.iterated_estimate
+                    .map_or(String::new(), |e| format!("{e:e}")),
+            );
         }
         csv.write_record(&row)?;
     }

@@ -70,6 +70,14 @@ pub struct ChannelValue {
     /// The estimated max error of u_n on P's element (absolute), when the
     /// solve estimated its error.
     pub estimate: Option<f64>,
+    /// The estimated error of û_n(P) (absolute), when the solve estimated
+    /// its error: û_n - u = ρ K (u_n - u) at P, so it is at most ρ(P) times
+    /// the sum over the elements of P's view of each one's share of it
+    /// (1/π) ∫_Δk G V, which the row of K holds, times its estimate. The
+    /// shares sum to at most 1: this is a weighted mean of the element
+    /// estimates that P sees, times ρ(P), and usually well below
+    /// `estimate`.
+    pub iterated_estimate: Option<f64>,
 }
 
 /// The values at one query point.
@@ -277,6 +285,10 @@ impl PointEvaluator {
             .map(|at| {
                 let (row, _) = self.row(&at);
                 let site = mesh.site(at.element, at.st[0], at.st[1]);
+                // Each element's share of P's view: its basis functions sum to 1.
+                let share: Vec<f64> = (0..mesh.len())
+                    .map(|k| row[self.disc.range(k)].iter().sum())
+                    .collect();
                 let channels = channels
                     .iter()
                     .zip(&problem.channels)
@@ -284,13 +296,18 @@ impl PointEvaluator {
                         let values = ch.solution.nodal();
                         let ku: f64 = row.iter().zip(values).map(|(a, b)| a * b).sum();
                         let u = ch.solution.eval(at.element, at.st[0], at.st[1]);
+                        let rho = fields.rho.eval(&site);
+                        let est = ch.estimate.as_ref();
                         ChannelValue {
                             u,
-                            iterated: fields.emission.eval(&site) + fields.rho.eval(&site) * ku,
-                            estimate: ch
-                                .estimate
-                                .as_ref()
-                                .map(|e| e.elements[at.element] + e.visibility_bound),
+                            iterated: fields.emission.eval(&site) + rho * ku,
+                            estimate: est.map(|e| e.elements[at.element] + e.visibility_bound),
+                            iterated_estimate: est.map(|e| {
+                                let seen: f64 = (share.iter().zip(&e.elements))
+                                    .map(|(m, x)| m.abs() * (x + e.visibility_bound))
+                                    .sum();
+                                rho.abs() * seen
+                            }),
                         }
                     })
                     .collect();
