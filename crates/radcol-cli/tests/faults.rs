@@ -708,7 +708,24 @@ fn obj_cases() -> Vec<Case> {
         "{}{tri}usemtl white\nf 1 2 3\n",
         "mtllib w.mtl\n".repeat(5_000)
     );
+    // A closed unit box 1e-13 thick, its faces turned inwards.
+    let thin_box = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n\
+                    v 0 0 1e-13\nv 1 0 1e-13\nv 1 1 1e-13\nv 0 1 1e-13\n\
+                    f 1 2 3 4\nf 5 8 7 6\nf 1 5 6 2\nf 2 6 7 3\nf 3 7 8 4\nf 4 8 5 1\n";
     let mut cases = vec![
+        with_files(
+            case(
+                "a closed box 1e-13 thick",
+                &["info", "{dir}/s.obj"],
+                Warned(&[
+                    "s.obj:12: faces the triangle at",
+                    "s.obj:11",
+                    "1.0e-13 away",
+                    "cannot be resolved",
+                ]),
+            ),
+            obj(thin_box),
+        ),
         with_files(
             case(
                 "5 000 mtllib lines of a 20 000-material library",

@@ -33,6 +33,47 @@ pub(crate) fn coplanar_overlaps(tris: &[[DVec3; 3]], scale: f64) -> Vec<(usize, 
     found
 }
 
+/// Pairs (i, j) of triangles of `tris` that overlap seen along their
+/// common normal, face each other and lie closer than 1e-9 of `scale`
+/// apart (within the plane key's step) but not in one plane: the two walls
+/// of a closed box thinner than quadrature can resolve. With the distance
+/// between them. (Facing away, or at no distance, they are a two-sided
+/// panel, which sees nothing of itself.)
+pub(crate) fn facing_too_close(tris: &[[DVec3; 3]], scale: f64) -> Vec<(usize, usize, f64)> {
+    let mut planes: HashMap<[i64; 4], Vec<usize>> = HashMap::new();
+    for (i, t) in tris.iter().enumerate() {
+        if let Some(key) = plane_key(t, scale) {
+            planes.entry(key).or_default().push(i);
+        }
+    }
+    let centre = |i: usize| (tris[i][0] + tris[i][1] + tris[i][2]) / 3.0;
+    let mut found = Vec::new();
+    for (key, front) in &planes {
+        for step in -1..=1 {
+            let flipped = [-key[0], -key[1], -key[2], -key[3] + step];
+            let Some(back) = planes.get(&flipped) else {
+                continue;
+            };
+            let members: Vec<usize> = front.iter().chain(back).copied().collect();
+            let [a, b, c] = tris[front[0]];
+            let n = (b - a).cross(c - a).normalize();
+            for (i, j) in overlaps_in_plane(tris, &members) {
+                let (k, l) = if front.contains(&i) { (i, j) } else { (j, i) };
+                if !front.contains(&k) || !back.contains(&l) {
+                    continue;
+                }
+                let gap = (centre(l) - centre(k)).dot(n);
+                if gap > 0.0 {
+                    found.push((k.min(l), k.max(l), gap));
+                }
+            }
+        }
+    }
+    found.sort_by(|x, y| (x.0, x.1).cmp(&(y.0, y.1)));
+    found.dedup_by(|x, y| (x.0, x.1) == (y.0, y.1));
+    found
+}
+
 /// The oriented plane of triangle `[a, b, c]` as a hashable key: unit
 /// normal and offset (relative to `scale`) to 1e-9; None when degenerate.
 pub(super) fn plane_key([a, b, c]: &[DVec3; 3], scale: f64) -> Option<[i64; 4]> {
@@ -127,6 +168,36 @@ mod tests {
         } else {
             vec![[a, b, d], [b, c, d]]
         }
+    }
+
+    #[test]
+    fn a_box_thinner_than_rounding_is_found_and_a_two_sided_panel_is_not() {
+        // A unit square floor (up) under a ceiling (down) 1e-13 above it.
+        let floor = quad(0.0, false);
+        let flip = |t: &[DVec3; 3]| [t[0], t[2], t[1]];
+        let ceiling: Vec<[DVec3; 3]> = (quad(1e-13, true).iter()).map(flip).collect();
+        let thin: Vec<[DVec3; 3]> = floor.iter().chain(&ceiling).copied().collect();
+        let found = facing_too_close(&thin, 1.0);
+        assert!(!found.is_empty() && found.iter().all(|f| f.2 > 0.0 && f.2 < 1e-12));
+        // The same faces turned outwards, and a panel at no distance: apart.
+        let outward: Vec<[DVec3; 3]> = (quad(0.0, false).iter())
+            .map(flip)
+            .chain(quad(1e-13, true))
+            .collect();
+        assert!(facing_too_close(&outward, 1.0).is_empty());
+        let panel: Vec<[DVec3; 3]> = floor
+            .iter()
+            .chain(floor.iter().map(flip).collect::<Vec<_>>().iter())
+            .copied()
+            .collect();
+        assert!(facing_too_close(&panel, 1.0).is_empty());
+        // A real room's floor and ceiling are far apart.
+        let room: Vec<[DVec3; 3]> = floor
+            .iter()
+            .copied()
+            .chain((quad(0.5, false).iter()).map(flip))
+            .collect();
+        assert!(facing_too_close(&room, 1.0).is_empty());
     }
 
     #[test]

@@ -123,6 +123,22 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
             ));
         }
     }
+    {
+        let mut w = Capped::new(&mut warnings, "too-thin");
+        let mut said = std::collections::HashSet::new();
+        for (i, j, gap) in super::overlap::facing_too_close(&tris, scale) {
+            // Once per pair of input faces (a quad is two triangles).
+            if !said.insert((kept[i].at.clone(), kept[j].at.clone())) {
+                continue;
+            }
+            w.push(format!(
+                "{}: faces the triangle at {} from {gap:.1e} away, below 1e-9 of the scene's size: \
+                 the light between them cannot be resolved (a closed box this thin reads as a \
+                 two-sided panel); make it thicker or one panel",
+                kept[j].at, kept[i].at
+            ));
+        }
+    }
     t_junctions(&tris, &kept, scale, &mut warnings);
     if !kept.iter().any(|t| materials[t.material].is_emitter()) {
         warnings.push(NO_EMITTER.to_string());
