@@ -69,7 +69,7 @@ pub(crate) fn facing_too_close(tris: &[[DVec3; 3]], scale: f64) -> Vec<(usize, u
             }
         }
     }
-    found.sort_by(|x, y| (x.0, x.1).cmp(&(y.0, y.1)));
+    found.sort_by_key(|x| (x.0, x.1));
     found.dedup_by(|x, y| (x.0, x.1) == (y.0, y.1));
     found
 }
