@@ -110,6 +110,16 @@ fn sphere_points(n: usize) -> Vec<QueryPoint> {
         .collect()
 }
 
+/// [`sphere_points`] on the ellipsoid of semi-axes 1, 1.3, 0.8.
+fn ellipsoid_points(n: usize) -> Vec<QueryPoint> {
+    (sphere_points(n).into_iter())
+        .map(|q| QueryPoint {
+            position: q.position * DVec3::new(1.0, 1.3, 0.8),
+            normal: None,
+        })
+        .collect()
+}
+
 /// Per level: mesh size h, max |u_n − u| and max |û_n − u| over `pts`,
 /// and max |u_n − u| over the nodes, at degree `r`.
 fn point_errors(
@@ -155,20 +165,10 @@ fn point_errors(
 fn iterated_solution_superconverges_at_any_point() {
     let sphere = radcol_tests::sphere_closed_form();
     let ellipsoid = radcol_tests::ellipsoid_manufactured();
-    let on_ellipsoid = |q: QueryPoint| QueryPoint {
-        position: q.position * DVec3::new(1.0, 1.3, 0.8),
-        normal: None,
-    };
     let cases = [
         ("sphere", &sphere, 1, 1..=4, sphere_points(60)),
         ("sphere", &sphere, 2, 2..=4, sphere_points(60)),
-        (
-            "ellipsoid",
-            &ellipsoid,
-            1,
-            1..=3,
-            sphere_points(60).into_iter().map(on_ellipsoid).collect(),
-        ),
+        ("ellipsoid", &ellipsoid, 1, 1..=3, ellipsoid_points(60)),
     ];
     for (name, problem, r, levels, pts) in cases {
         println!("{name}, r = {r}:");
@@ -332,17 +332,9 @@ fn edges_and_corners_of_a_closed_room_give_the_limit_from_their_face() {
 fn the_estimate_of_the_iterated_value_covers_its_error() {
     let sphere = radcol_tests::sphere_closed_form();
     let ellipsoid = radcol_tests::ellipsoid_manufactured();
-    let on_ellipsoid = |q: QueryPoint| QueryPoint {
-        position: q.position * DVec3::new(1.0, 1.3, 0.8),
-        normal: None,
-    };
     let cases = [
         ("sphere", &sphere, sphere_points(60)),
-        (
-            "ellipsoid",
-            &ellipsoid,
-            sphere_points(60).into_iter().map(on_ellipsoid).collect(),
-        ),
+        ("ellipsoid", &ellipsoid, ellipsoid_points(60)),
     ];
     for (name, problem, pts) in cases {
         let exact = problem.exact.clone().expect("closed form");
