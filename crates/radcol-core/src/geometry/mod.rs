@@ -229,14 +229,21 @@ pub fn bounds(points: impl IntoIterator<Item = DVec3>) -> (DVec3, DVec3) {
     )
 }
 
-/// (s, t) with a + s (b - a) + t (c - a) = x, if x lies in the triangle (within 1e-12).
-pub fn barycentric_st(a: DVec3, b: DVec3, c: DVec3, x: DVec3) -> Option<[f64; 2]> {
+/// (s, t) with a + s (b - a) + t (c - a) the point of the triangle's plane
+/// nearest x (x projected onto it), inside the triangle or not.
+pub fn plane_st(a: DVec3, b: DVec3, c: DVec3, x: DVec3) -> [f64; 2] {
     let (e1, e2, d) = (b - a, c - a, x - a);
     let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
     let (d1, d2) = (d.dot(e1), d.dot(e2));
     let det = d11 * d22 - d12 * d12;
-    let s = (d22 * d1 - d12 * d2) / det;
-    let t = (d11 * d2 - d12 * d1) / det;
+    [(d22 * d1 - d12 * d2) / det, (d11 * d2 - d12 * d1) / det]
+}
+
+/// (s, t) with a + s (b - a) + t (c - a) = x, if x lies in the triangle (within 1e-12).
+pub fn barycentric_st(a: DVec3, b: DVec3, c: DVec3, x: DVec3) -> Option<[f64; 2]> {
+    let (e1, e2, d) = (b - a, c - a, x - a);
+    let (d11, d22) = (e1.dot(e1), e2.dot(e2));
+    let [s, t] = plane_st(a, b, c, x);
     let eps = 1e-12;
     let off_plane = (d - e1 * s - e2 * t).length();
     (s >= -eps && t >= -eps && s + t <= 1.0 + eps && off_plane <= 1e-9 * (d11 + d22).sqrt())

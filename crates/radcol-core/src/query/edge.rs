@@ -150,13 +150,9 @@ fn wedge(
 /// Barycentric coordinates of `p` in the triangle `v`, when it lies in
 /// its closure within `tol` (a length).
 fn barycentric(v: &[DVec3; 3], p: DVec3, tol: f64) -> Option<[f64; 3]> {
-    let (e1, e2, d) = (v[1] - v[0], v[2] - v[0], p - v[0]);
-    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-    let (d1, d2) = (d.dot(e1), d.dot(e2));
-    let det = d11 * d22 - d12 * d12;
-    let s = (d22 * d1 - d12 * d2) / det;
-    let t = (d11 * d2 - d12 * d1) / det;
-    let slack = tol / d11.max(d22).sqrt();
+    let [s, t] = crate::geometry::plane_st(v[0], v[1], v[2], p);
+    let longest = (v[1] - v[0]).length().max((v[2] - v[0]).length());
+    let slack = tol / longest;
     let inside = s >= -slack && t >= -slack && s + t <= 1.0 + slack;
     inside.then(|| {
         let (s, t) = (s.clamp(0.0, 1.0), t.clamp(0.0, 1.0));

@@ -154,12 +154,7 @@ fn space_area(v: &[DVec3; 3]) -> f64 {
 /// The texture coordinates at `x` of the flat triangle `v` whose corners
 /// have `uv` (affine in the triangle's plane; x projected onto it).
 pub(super) fn interpolate(v: &[DVec3; 3], uv: &[[f64; 2]; 3], x: DVec3) -> [f64; 2] {
-    let (e1, e2, d) = (v[1] - v[0], v[2] - v[0], x - v[0]);
-    let (a, b, c) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-    let (p, q) = (d.dot(e1), d.dot(e2));
-    let det = a * c - b * b;
-    let s = (c * p - b * q) / det;
-    let t = (a * q - b * p) / det;
+    let [s, t] = crate::geometry::plane_st(v[0], v[1], v[2], x);
     [0, 1].map(|i| uv[0][i] + s * (uv[1][i] - uv[0][i]) + t * (uv[2][i] - uv[0][i]))
 }
 
