@@ -77,6 +77,7 @@ fn check(surface: Arc<Surface>, level: u32, degree: usize, what: &str) {
         &vis,
         (None, None),
     );
+    fill_all(&check);
     for step in 0..2 {
         // Every third element (shifted per step) split.
         let (refined, _, _, unchanged) = split_every(&mesh, step, 3);
@@ -168,6 +169,25 @@ fn check(surface: Arc<Surface>, level: u32, degree: usize, what: &str) {
             check_fresh.classes(),
             "{what} step {step}: check classes with the square plan's candidates"
         );
+        // The updated plan copies the entries of unchanged partly visible
+        // pairs that the previous check plan stored (it was filled: by
+        // `fill_all` before the first step, by the estimate after); they
+        // are the clipped ones bit for bit, at fewer kernel evaluations.
+        let (fresh_entries, fresh_evals) = fill_all(&check_fresh);
+        let (updated_entries, updated_evals) = fill_all(&check_updated);
+        assert!(
+            fresh_entries == updated_entries,
+            "{what} step {step}: stored check entries differ"
+        );
+        println!(
+            "{what} step {step}: check rows' kernel evaluations {updated_evals} with the stored entries vs {fresh_evals} fresh"
+        );
+        if check_fresh.stats().pairs_partial > 0 {
+            assert!(
+                updated_evals < fresh_evals,
+                "{what} step {step}: no stored entry taken"
+            );
+        }
         let c = estimate(&check_known, &fields);
         assert!(
             a[0].elements == c[0].elements && a[0].max == c[0].max && a[0].l2 == c[0].l2,
@@ -178,6 +198,17 @@ fn check(surface: Arc<Surface>, level: u32, degree: usize, what: &str) {
         matrix = reused.matrix;
         check = check_updated;
     }
+}
+
+/// Every row block of `plan` filled, and the kernel evaluations.
+fn fill_all(plan: &AssemblyPlan) -> (Vec<f64>, u64) {
+    let (mut all, mut evals) = (Vec::new(), 0);
+    for kp in 0..plan.rows().mesh().len() {
+        let mut block = vec![0.0; plan.rows().nodes_per(kp) * plan.dim()];
+        evals += plan.fill_block(kp, &mut block, radcol_core::assembly::FillMode::All);
+        all.extend(block);
+    }
+    (all, evals)
 }
 
 #[test]

@@ -17,7 +17,7 @@ use crate::estimate::{
     ESTIMATE_QUAD_TOL,
 };
 use crate::mesh::Mesh;
-use crate::nodes::NodeSet;
+use crate::nodes::{nodes_per_element, NodeSet};
 use crate::norms::error_norms;
 use crate::problem::Problem;
 use crate::visibility::VisibilityAnalysis;
@@ -98,6 +98,12 @@ fn assemble(
         (Some(b), Some((after, _))) => plan.heap_bytes().max(after.saturating_sub(b)),
         _ => plan.heap_bytes(),
     };
+    // The estimate keeps the entries of its partly visible pairs: check
+    // points (degree r + 1) times the column element's unknowns, per pair.
+    let store = 8.0
+        * plan.partial_entries(|kp| {
+            nodes_per_element((disc.degree(kp) + 1).min(crate::nodes::MAX_DEGREE))
+        }) as f64;
     let predict = |matrix_bytes: Option<f64>| {
         MemoryUse::predict(
             disc.len(),
@@ -106,6 +112,7 @@ fn assemble(
             channels * (cfg.gmres.restart + 4),
             cfg.estimate,
         )
+        .with_estimate_store(store)
         .with_matrix(matrix_bytes)
     };
     Error::if_cancelled(cfg.progress.as_ref(), "plan")?;

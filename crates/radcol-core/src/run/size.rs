@@ -269,6 +269,22 @@ impl MemoryUse {
         }
     }
 
+    /// The same prediction with the error estimate holding `bytes` more
+    /// (the entries of its partly visible pairs, kept for the next step).
+    pub fn with_estimate_store(self, bytes: f64) -> Self {
+        if self.estimate_bytes == 0.0 {
+            return self;
+        }
+        let before = self.solver_bytes.max(self.estimate_bytes);
+        let estimate_bytes = self.estimate_bytes + bytes;
+        Self {
+            estimate_bytes,
+            predicted_peak_bytes: self.predicted_peak_bytes - before
+                + self.solver_bytes.max(estimate_bytes),
+            ..self
+        }
+    }
+
     /// The same prediction with a geometric operator of `matrix` bytes
     /// instead of the dense 8 N² (None: unchanged): a compressed one, 0
     /// before it is built.
@@ -347,7 +363,17 @@ mod tests {
         // The estimate's plan wins over GMRES.
         assert_eq!(gm.estimate_bytes, 5e6);
         assert_eq!(gm.predicted_peak_bytes - gm.after_plan_bytes, 8e6 + 5e6);
+        // The estimate's stored entries add to it, and to the peak where
+        // it is the larger; nothing without an estimate.
+        let stored = gm.with_estimate_store(1e6);
+        assert_eq!(stored.predicted_peak_bytes - gm.after_plan_bytes, 8e6 + 6e6);
+        let lu_stored = lu.with_estimate_store(1e6);
+        assert_eq!(lu_stored.predicted_peak_bytes - lu.after_plan_bytes, 16e6);
+        let lu_more = lu.with_estimate_store(4e6);
+        assert_eq!(lu_more.predicted_peak_bytes - lu.after_plan_bytes, 8e6 + 9e6);
         let none = MemoryUse::predict(1000, 5_000_000, SolverKind::Gmres, 34, false);
+        let none_stored = none.with_estimate_store(1e6);
+        assert_eq!(none_stored.predicted_peak_bytes, none.predicted_peak_bytes);
         assert_eq!(
             none.predicted_peak_bytes - none.after_plan_bytes,
             8e6 + 8.0 * 1000.0 * 34.0

@@ -157,9 +157,14 @@ impl AssemblyPlan {
         let max_nq = self.max_nq();
         let mut g = vec![0.0f64; RUN_CHUNK * max_nq];
         let mut evals = 0u64;
+        // Partly visible pairs of unchanged elements whose entries the
+        // previous plan stored are copied, not clipped again.
+        let previous = self.from_previous(kp);
+        let stored = |k: usize| mode == FillMode::All && previous.get(self, k).is_some();
+        let skip_all = |k: usize| skip(k) || stored(k);
         let mut k = 0;
         while k < n {
-            if skip(k) {
+            if skip_all(k) {
                 k += 1;
                 continue;
             }
@@ -173,12 +178,16 @@ impl AssemblyPlan {
                 && end - k < RUN_CHUNK
                 && classes[end] == class
                 && disc.set_index(end) == set
-                && !skip(end)
+                && !skip_all(end)
             {
                 end += 1;
             }
             evals += fill.run(PairClass::from_code(class), k..end, block, mode, &mut g);
             k = end;
+        }
+        if mode == FillMode::All {
+            self.copy_previous(kp, block, &previous, |k| !skip(k));
+            self.store_row(kp, block, &previous, |k| !skip(k));
         }
         if mode != FillMode::FarOnly {
             if let Some(p) = &self.progress {

@@ -18,6 +18,7 @@ mod execute;
 mod kernels;
 mod reuse;
 mod sample;
+mod stored;
 mod tables;
 
 pub use class_table::{
@@ -39,7 +40,8 @@ use crate::visibility::walk::PartialRow;
 use crate::visibility::{self, Occluders, VisibilityAnalysis};
 use classify::{bounce_columns, classify_all};
 use serde::Serialize;
-use std::sync::Arc;
+use std::sync::{Arc, Weak};
+use stored::Stored;
 
 /// Pair counts (collocation point × element) and far kernel evaluations.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -106,6 +108,12 @@ pub struct AssemblyPlan {
     /// Of a sampled plan ([`AssemblyCost`]): the seconds each row block took
     /// to classify (zero for the rows left out); empty otherwise.
     row_seconds: Vec<f32>,
+    /// Of an [`AssemblyPlan::at_points`] plan in a scene that occludes: the
+    /// entries of its partly visible pairs, for the plan of a refined mesh
+    /// ([`stored`]).
+    stored: Option<Arc<Stored>>,
+    /// The store of the previous plan this one reused, if it is alive.
+    previous_stored: Option<Weak<Stored>>,
 }
 
 impl AssemblyPlan {
@@ -260,6 +268,8 @@ impl AssemblyPlan {
         let tables = (0..=MAX_RULE_DEGREE)
             .map(|d| used[d].then(|| tables::build_table(&disc, &ladder, d, flat.as_ref())))
             .collect();
+        let stored = (rows.is_some() && occluders.is_some())
+            .then(|| Arc::new(Stored::new(disc.mesh().len())));
         Self {
             self_rule: Arc::new(SelfRules::new(opts.self_order)),
             shortfall: Arc::default(),
@@ -274,8 +284,12 @@ impl AssemblyPlan {
             occluders,
             partial,
             progress,
+            previous_stored: prev
+                .as_ref()
+                .and_then(|(p, _)| p.stored.as_ref().map(Arc::downgrade)),
             unchanged: prev.map(|(p, u)| (u, p.disc.clone(), p.rows().clone())),
             row_seconds,
+            stored,
         }
     }
 
@@ -348,7 +362,8 @@ impl AssemblyPlan {
         let tables = tables + shared.unwrap_or(0);
         let partial: usize = self.partial.iter().map(|r| r.heap_bytes()).sum::<usize>()
             + self.partial.capacity() * std::mem::size_of::<PartialRow>();
-        (self.classes.heap_bytes() + tables + partial) as u64
+        let stored = self.stored.as_ref().map_or(0, |s| s.heap_bytes());
+        (self.classes.heap_bytes() + tables + partial + stored) as u64
     }
 
     /// Pair statistics, with the integrals filled so far that fell short of
