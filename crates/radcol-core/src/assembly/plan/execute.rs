@@ -159,7 +159,7 @@ impl AssemblyPlan {
         let mut evals = 0u64;
         // Partly visible pairs of unchanged elements whose entries the
         // previous plan stored are copied, not clipped again.
-        let previous = self.from_previous(kp);
+        let previous = self.stored_previously(kp);
         let stored = |k: usize| mode == FillMode::All && previous.get(self, k).is_some();
         let skip_all = |k: usize| skip(k) || stored(k);
         let mut k = 0;

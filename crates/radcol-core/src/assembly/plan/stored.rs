@@ -65,12 +65,12 @@ impl Stored {
 }
 
 /// What the fill of one row block takes from the previous plan's store.
-pub(super) struct FromPrevious {
+pub(super) struct StoredBefore {
     store: Option<Arc<Stored>>,
     old_row: usize,
 }
 
-impl FromPrevious {
+impl StoredBefore {
     /// The stored entries of column element `k` (this plan's numbering) of
     /// the row block, when both elements are unchanged and the previous
     /// plan stored the pair.
@@ -84,12 +84,12 @@ impl AssemblyPlan {
     /// What the fill of row block `kp` may take from the previous plan's
     /// stored entries (nothing unless this plan reused a previous one that
     /// stored them, and `kp` is unchanged).
-    pub(super) fn from_previous(&self, kp: usize) -> FromPrevious {
+    pub(super) fn stored_previously(&self, kp: usize) -> StoredBefore {
         let old_row = self.unchanged().and_then(|u| u.old(kp));
         let store = old_row
             .and(self.previous_stored.as_ref())
             .and_then(Weak::upgrade);
-        FromPrevious {
+        StoredBefore {
             store,
             old_row: old_row.unwrap_or(0),
         }
@@ -103,7 +103,7 @@ impl AssemblyPlan {
         &self,
         kp: usize,
         block: &[f64],
-        previous: &FromPrevious,
+        previous: &StoredBefore,
         filled: impl Fn(usize) -> bool,
     ) {
         let Some(store) = &self.stored else {
@@ -145,7 +145,7 @@ impl AssemblyPlan {
         &self,
         kp: usize,
         block: &mut [f64],
-        previous: &FromPrevious,
+        previous: &StoredBefore,
         take: impl Fn(usize) -> bool,
     ) {
         if previous.store.is_none() {
