@@ -370,7 +370,10 @@ mod tests {
         let lu_stored = lu.with_estimate_store(1e6);
         assert_eq!(lu_stored.predicted_peak_bytes - lu.after_plan_bytes, 16e6);
         let lu_more = lu.with_estimate_store(4e6);
-        assert_eq!(lu_more.predicted_peak_bytes - lu.after_plan_bytes, 8e6 + 9e6);
+        assert_eq!(
+            lu_more.predicted_peak_bytes - lu.after_plan_bytes,
+            8e6 + 9e6
+        );
         let none = MemoryUse::predict(1000, 5_000_000, SolverKind::Gmres, 34, false);
         let none_stored = none.with_estimate_store(1e6);
         assert_eq!(none_stored.predicted_peak_bytes, none.predicted_peak_bytes);

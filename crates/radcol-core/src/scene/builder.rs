@@ -204,6 +204,7 @@ impl SceneBuilder {
             camera: self.camera,
             warnings: Vec::new(),
             source: None,
+            duplicates: Default::default(),
         })
     }
 }

@@ -13,9 +13,9 @@
 //! warning. Polygons are triangulated whatever their convexity
 //! ([`super::polygon`]); a face may have up to [`MAX_FACE_VERTICES`] vertices.
 
-use super::raw::RawScene;
+use super::raw::{duplicate_message, Dropped, RawScene};
 use super::scan::{rest, syntax, ScanFace};
-use super::validate::finish;
+use super::validate::{degenerate_why, finish, oriented_key};
 use super::{Material, Scene, SceneError};
 use glam::DVec3;
 use std::collections::HashMap;
@@ -119,6 +119,8 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
     let mut warnings = Vec::new();
     let mut skipped: Vec<usize> = Vec::new();
     let mut ignored = super::ignored::Ignored::default();
+    let mut seen: HashMap<[[u64; 3]; 3], usize> = HashMap::new();
+    let mut duplicates = Dropped::default();
     // What tobj reads: the same lines, trimmed, with l/p statements blanked so
     // that line-for-line structure is kept.
     let mut for_tobj = String::with_capacity(text.len());
@@ -133,16 +135,26 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
             "v" => positions.push(parse_vertex(line, words, &at(line_no))?),
             "vt" => texcoords.push(parse_texcoord(line, words, &at(line_no))?),
             "f" => {
-                let (at, group) = (&at(line_no), group.clone());
-                faces.push(scan_face(
+                let (here, group) = (&at(line_no), group.clone());
+                let face = scan_face(
                     words,
-                    at,
+                    here,
                     line_no,
                     group,
                     material,
                     (&positions, &texcoords),
                     &mut warnings,
-                )?);
+                )?;
+                // A copy of an earlier triangle is dropped here, and left
+                // out of what tobj reads, instead of being held until the
+                // shared checks drop it.
+                match earlier_copy(&face, &positions, &mut seen) {
+                    Some(first) => {
+                        duplicates.note(|| duplicate_message(here, &at(first)));
+                        pass = false;
+                    }
+                    None => faces.push(face),
+                }
             }
             "l" | "p" => {
                 skipped.push(line_no);
@@ -192,6 +204,7 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
         ));
     }
     warnings.extend(ignored.warnings(file));
+    drop(seen);
 
     let (scan, w) = ((&faces[..], &positions[..], &materials[..]), &mut warnings);
     let triangles = super::tobj_match::match_tobj(file, &for_tobj, &libs, scan, w)?;
@@ -202,7 +215,33 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
         camera: None,
         warnings,
         source: None,
+        duplicates,
     })
+}
+
+/// The line of an earlier triangle face with the same positions in the
+/// same cyclic order as `face` (a triangle that is not degenerate: those
+/// are left to the shared checks), which is recorded in `seen` when it is
+/// the first.
+fn earlier_copy(
+    face: &ScanFace,
+    positions: &[DVec3],
+    seen: &mut HashMap<[[u64; 3]; 3], usize>,
+) -> Option<usize> {
+    let [a, b, c] = face.vertices[..] else {
+        return None;
+    };
+    let t = [positions[a], positions[b], positions[c]];
+    if degenerate_why(t).is_some() {
+        return None;
+    }
+    match seen.entry(oriented_key(&t)) {
+        std::collections::hash_map::Entry::Occupied(e) => Some(*e.get()),
+        std::collections::hash_map::Entry::Vacant(e) => {
+            e.insert(face.line);
+            None
+        }
+    }
 }
 
 /// The face statement at `line_no` (`at`) with the vertex `words`, in

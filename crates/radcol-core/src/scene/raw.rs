@@ -33,6 +33,36 @@ pub(crate) struct RawScene {
     pub camera: Option<Camera>,
     pub warnings: Vec<String>,
     pub source: Option<PathBuf>,
+    /// Duplicate triangles the loader dropped while reading.
+    pub duplicates: Dropped,
+}
+
+/// Duplicate triangles a loader dropped while reading, so that a file of
+/// one triangle repeated millions of times is not held in memory first:
+/// the first [`MAX_WARNINGS_PER_KIND`] messages, and how many more. The
+/// shared checks drop the rest and warn about all of them together.
+#[derive(Debug, Default)]
+pub(crate) struct Dropped {
+    pub listed: Vec<String>,
+    pub more: usize,
+}
+
+impl Dropped {
+    /// Notes one more dropped copy (its message formatted only while
+    /// listed).
+    pub(crate) fn note(&mut self, message: impl FnOnce() -> String) {
+        if self.listed.len() < MAX_WARNINGS_PER_KIND {
+            self.listed.push(message());
+        } else {
+            self.more += 1;
+        }
+    }
+}
+
+/// The warning for a triangle at `at` dropped as a copy of the one at
+/// `first`.
+pub(crate) fn duplicate_message(at: &str, first: &str) -> String {
+    format!("{at}: duplicate of the triangle at {first} (same vertices, same orientation) dropped")
 }
 
 /// Collects warnings of one kind, listing the first few and counting the rest.

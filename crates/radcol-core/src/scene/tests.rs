@@ -241,6 +241,42 @@ fn interleaved_groups_map_to_their_lines() {
     }
 }
 
+/// 100 000 copies of one triangle (rotated and not), in another group and
+/// between polygon faces, are dropped while the file is read: the scene
+/// holds the two triangles of the square, the first 20 copies are named
+/// with their line and the original's, the rest counted exactly, and a
+/// copy of a quadrilateral's triangle is still found by the shared checks.
+#[test]
+fn copies_of_a_triangle_are_dropped_while_reading() {
+    let copies = 100_000;
+    let mut extra = String::from("g other\n");
+    for i in 0..copies {
+        extra.push_str(if i % 2 == 0 { "f 1 2 3\n" } else { "f 2 3 1\n" });
+    }
+    // A quadrilateral and a copy of one of its triangles (after it).
+    extra.push_str("v 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nusemtl lamp\nf 5 8 7 6\nf 5 8 7\n");
+    let (p, r) = load(&square(&extra), MTL);
+    let s = r.unwrap();
+    assert_eq!(s.triangle_count(), 4);
+    let f = p.display().to_string();
+    let dups: Vec<&String> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("duplicate of"))
+        .collect();
+    assert_eq!(dups.len(), MAX_WARNINGS_PER_KIND, "{:#?}", s.warnings);
+    // Lines 10.. are the copies of line 8's triangle.
+    for (i, w) in dups.iter().enumerate() {
+        let want = format!("{f}:{}: duplicate of the triangle at {f}:8 ", 11 + i);
+        assert!(w.starts_with(&want), "{w} should start with {want}");
+    }
+    let more = format!(
+        "... and {} more duplicate-triangle warnings",
+        copies + 1 - MAX_WARNINGS_PER_KIND
+    );
+    assert!(s.warnings.contains(&more), "{more} in {:#?}", s.warnings);
+}
+
 #[test]
 fn repairs_and_warnings_name_lines() {
     let f = |p: &Path| p.display().to_string();

@@ -1,7 +1,7 @@
 //! Shared checks and repairs of every scene input: triangles with their origin
 //! (file:line or group/face) become a [`Scene`], or a [`SceneError`].
 
-use super::raw::{Capped, RawScene, RawTriangle};
+use super::raw::{duplicate_message, Capped, Dropped, RawScene, RawTriangle};
 use super::{Material, Scene, SceneError, MAX_WARNINGS_PER_KIND};
 use crate::geometry::{Identity, Patch, Surface};
 use crate::visibility::is_convex_enclosure;
@@ -19,7 +19,7 @@ fn key(v: DVec3) -> [u64; 3] {
 
 /// The triangle's cyclic order started at its smallest vertex: equal for the
 /// same triangle in the same orientation.
-fn oriented_key(t: &[DVec3; 3]) -> [[u64; 3]; 3] {
+pub(super) fn oriented_key(t: &[DVec3; 3]) -> [[u64; 3]; 3] {
     let k = t.map(key);
     let i = (0..3).min_by_key(|&i| k[i]).unwrap_or(0);
     [k[i], k[(i + 1) % 3], k[(i + 2) % 3]]
@@ -84,6 +84,7 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
         camera,
         mut warnings,
         source,
+        duplicates,
     } = raw;
     if triangles.is_empty() {
         return Err(SceneError::Empty {
@@ -104,7 +105,7 @@ pub(crate) fn finish(raw: RawScene) -> Result<Scene, SceneError> {
     );
     let scale = (hi - lo).length();
 
-    let (kept, degenerate) = drop_degenerate_and_duplicates(triangles, &mut warnings);
+    let (kept, degenerate) = drop_degenerate_and_duplicates(triangles, duplicates, &mut warnings);
     if kept.is_empty() {
         return Err(SceneError::Empty {
             name,
@@ -209,7 +210,7 @@ fn texture_coordinates(
 /// the rounding of its coordinates (longest edge within 1e3 ulps of them).
 /// A tolerance relative to the scene instead dropped a unit light when one
 /// vertex of the scene lay at 1.2e8 (issue 12).
-fn degenerate_why([a, b, c]: [DVec3; 3]) -> Option<String> {
+pub(super) fn degenerate_why([a, b, c]: [DVec3; 3]) -> Option<String> {
     let area = 0.5 * (b - a).cross(c - a).length();
     let longest = (b - a).length().max((c - b).length()).max((a - c).length());
     let reach = a.abs().max(b.abs()).max(c.abs()).max_element();
@@ -228,10 +229,11 @@ fn degenerate_why([a, b, c]: [DVec3; 3]) -> Option<String> {
 
 /// Drops degenerate triangles ([`degenerate_why`]) and duplicates (same
 /// vertices, same orientation), with
-/// a capped warning for each; returns the kept triangles and how many were
-/// degenerate.
+/// a capped warning for each (after those the loader `dropped` already);
+/// returns the kept triangles and how many were degenerate.
 fn drop_degenerate_and_duplicates(
     triangles: Vec<RawTriangle>,
+    dropped: Dropped,
     warnings: &mut Vec<String>,
 ) -> (Vec<RawTriangle>, usize) {
     let mut kept: Vec<RawTriangle> = Vec::with_capacity(triangles.len());
@@ -241,7 +243,7 @@ fn drop_degenerate_and_duplicates(
         let mut deg = Capped::new(warnings, "degenerate-triangle");
         // Listed after the degenerate ones; only as many as are listed are
         // formatted (33 M copies of one triangle held 33 M messages).
-        let (mut dup_list, mut dup_more) = (Vec::new(), 0);
+        let (mut dup_list, mut dup_more) = (dropped.listed, dropped.more);
         for t in triangles {
             if let Some(why) = degenerate_why(t.vertices) {
                 deg.push(format!("{}: degenerate triangle ({why}) dropped", t.at));
@@ -255,11 +257,7 @@ fn drop_degenerate_and_duplicates(
                     dup_more += 1;
                 }
                 std::collections::hash_map::Entry::Occupied(e) => {
-                    dup_list.push(format!(
-                        "{}: duplicate of the triangle at {} (same vertices, same orientation) dropped",
-                        t.at,
-                        kept[*e.get()].at
-                    ));
+                    dup_list.push(duplicate_message(&t.at, &kept[*e.get()].at));
                 }
                 std::collections::hash_map::Entry::Vacant(e) => {
                     e.insert(kept.len());
