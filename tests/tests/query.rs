@@ -361,3 +361,53 @@ fn the_estimate_of_the_iterated_value_covers_its_error() {
         }
     }
 }
+
+/// Points a hair inside every element of the Cornell box from each of its
+/// corners (1e-7 of the way to its centre), as a program asking for the
+/// value at each input vertex does. Next to a block's foot corner the
+/// visible part of the floor repeats a vertex; its fan held triangles of
+/// no area, which the adaptive quadrature split into segments covering
+/// each other, doubling its work at every level down to its depth limit
+/// (8 to 270 s for one point). The kernel evaluations of every point's
+/// row are now within 20 times the median point's.
+#[test]
+fn points_next_to_corners_cost_no_more_than_others() {
+    let cornell = builtin("cornell").unwrap().unwrap().problem();
+    let cfg = SolveConfig {
+        estimate: false,
+        ..config(1, 0)
+    };
+    let out = solve(&cornell, &cfg, &CpuBackend).unwrap();
+    let mesh = out.discretization.mesh().clone();
+    let eval = PointEvaluator::new(
+        out.discretization.clone(),
+        cfg.quad.clone(),
+        &out.visibility,
+    );
+    let mut evals = Vec::new();
+    for k in 0..mesh.len() {
+        let v = mesh.vertices(k);
+        let centre = (v[0] + v[1] + v[2]) / 3.0;
+        let normal = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+        for c in v {
+            let q = QueryPoint {
+                position: c + 1e-7 * (centre - c),
+                normal: Some(normal),
+            };
+            let at = eval.locate(&q, 1e-6).expect("on the surface");
+            evals.push((eval.row(&at).1, k, c));
+        }
+    }
+    let mut sorted: Vec<u64> = evals.iter().map(|e| e.0).collect();
+    sorted.sort_unstable();
+    let median = sorted[sorted.len() / 2];
+    let worst = evals.iter().max_by_key(|e| e.0).unwrap();
+    println!(
+        "{} points: kernel evaluations median {median}, most {} (element {}, corner {:?})",
+        evals.len(),
+        worst.0,
+        worst.1,
+        worst.2
+    );
+    assert!(worst.0 <= 20 * median, "{worst:?} against median {median}");
+}
