@@ -116,10 +116,10 @@ impl AssemblyPlan {
         }
         let disc = &*self.disc;
         let (ncols, f) = (disc.len(), self.rows().nodes_per(kp));
-        let cols = &self.partial[kp].elements;
+        let cols: Vec<u32> = self.kept(kp).map(|k| k as u32).collect();
         let mut start = Vec::with_capacity(cols.len() + 1);
         let mut values = Vec::new();
-        for &k in cols {
+        for &k in &cols {
             let k = k as usize;
             start.push(values.len());
             if let Some(old) = previous.get(self, k) {
@@ -135,7 +135,7 @@ impl AssemblyPlan {
         }
         start.push(values.len());
         let _ = store.rows[kp].set(RowEntries {
-            cols: cols.clone().into_boxed_slice(),
+            cols: cols.into_boxed_slice(),
             start: start.into_boxed_slice(),
             values: values.into_boxed_slice(),
         });
@@ -155,8 +155,7 @@ impl AssemblyPlan {
         }
         let disc = &*self.disc;
         let (ncols, f) = (disc.len(), self.rows().nodes_per(kp));
-        for &k in &self.partial[kp].elements {
-            let k = k as usize;
+        for k in self.kept(kp) {
             if !take(k) {
                 continue;
             }
