@@ -294,8 +294,8 @@ fn on_both(check: fn(Arc<Surface>, u32, usize, &str), cornell: u32, sphere_level
 /// the bunny have dozens of candidate occluders, whose shadows are merged.
 #[test]
 fn a_bunny_room_reuses_the_entries_of_merged_shadows() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../benches/data/bunny_room_100.obj");
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../benches/data/bunny_room_100.obj");
     let room = radcol_core::scene::load_obj(&path).unwrap();
     check(room.problem().surface, 0, 1, "bunny room r=1");
 }

@@ -49,7 +49,7 @@ pub fn load_gltf(path: &Path) -> Result<Scene, SceneError> {
             MAX_SCENE_FILE_BYTES >> 20
         )));
     }
-    let gltf::Gltf { document, blob } = gltf::Gltf::open(path).map_err(|e| fail(e.to_string()))?;
+    let gltf::Gltf { document, blob } = open_checked(path).map_err(fail)?;
     let buffers = read_buffers(&document, path, blob).map_err(fail)?;
     let name = path
         .file_stem()
@@ -59,6 +59,36 @@ pub fn load_gltf(path: &Path) -> Result<Scene, SceneError> {
     scene.source = Some(path.to_path_buf());
     scene.metres_per_unit = Some(1.0);
     Ok(scene)
+}
+
+/// The document and binary chunk of the glTF or GLB at `path`, validated
+/// by the gltf crate once the indices its validation follows unchecked are
+/// checked here: a POSITION attribute naming an accessor that does not
+/// exist panicked inside it (found by fuzzing).
+fn open_checked(path: &Path) -> Result<gltf::Gltf, String> {
+    use std::io::Read;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(MAX_SCENE_FILE_BYTES).read_to_end(&mut bytes))
+        .map_err(|e| e.to_string())?;
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| e.to_string())?;
+    let json = document.into_json();
+    let accessors = json.accessors.len();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let named = (primitive.attributes.values())
+                .map(|a| a.value())
+                .chain(primitive.indices.map(|i| i.value()));
+            if let Some(i) = named.into_iter().find(|&i| i >= accessors) {
+                return Err(format!(
+                    "meshes[{m}].primitives[{p}] names accessor {i}, but there are {accessors}"
+                ));
+            }
+        }
+    }
+    let document = gltf::Document::from_json(json).map_err(|e| e.to_string())?;
+    Ok(gltf::Gltf { document, blob })
 }
 
 /// What the walk gathers besides the builder's triangles.
