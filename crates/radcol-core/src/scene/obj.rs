@@ -13,9 +13,9 @@
 //! warning. Polygons are triangulated whatever their convexity
 //! ([`super::polygon`]); a face may have up to [`MAX_FACE_VERTICES`] vertices.
 
-use super::raw::{duplicate_message, Dropped, RawScene};
-use super::scan::{rest, syntax, ScanFace};
-use super::validate::{degenerate_why, finish, oriented_key};
+use super::raw::RawScene;
+use super::scan::{rest, syntax, Copies, ScanFace};
+use super::validate::finish;
 use super::{Material, Scene, SceneError};
 use glam::DVec3;
 use std::collections::HashMap;
@@ -119,8 +119,7 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
     let mut warnings = Vec::new();
     let mut skipped: Vec<usize> = Vec::new();
     let mut ignored = super::ignored::Ignored::default();
-    let mut seen: HashMap<[[u64; 3]; 3], usize> = HashMap::new();
-    let mut duplicates = Dropped::default();
+    let mut copies = Copies::default();
     // What tobj reads: the same lines, trimmed, with l/p statements blanked so
     // that line-for-line structure is kept.
     let mut for_tobj = String::with_capacity(text.len());
@@ -145,16 +144,8 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
                     (&positions, &texcoords),
                     &mut warnings,
                 )?;
-                // A copy of an earlier triangle is dropped here, and left
-                // out of what tobj reads, instead of being held until the
-                // shared checks drop it.
-                match earlier_copy(&face, &positions, &mut seen) {
-                    Some(first) => {
-                        duplicates.note(|| duplicate_message(here, &at(first)));
-                        pass = false;
-                    }
-                    None => faces.push(face),
-                }
+                // A copy of an earlier triangle is left out of what tobj reads.
+                pass = copies.keep(face, &positions, &mut faces, &at);
             }
             "l" | "p" => {
                 skipped.push(line_no);
@@ -176,18 +167,7 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
                     &mut warnings,
                 )?;
             }
-            "usemtl" => {
-                let name = rest(line, keyword);
-                match by_name.get(name) {
-                    Some(&m) => material = Some(m),
-                    None => {
-                        return Err(SceneError::UndefinedMaterial {
-                            at: at(line_no),
-                            name: name.into(),
-                        })
-                    }
-                }
-            }
+            "usemtl" => material = Some(named(&by_name, rest(line, keyword), &at(line_no))?),
             "" => {}
             k if k.starts_with('#') => {}
             k => ignored.note(k, line_no),
@@ -204,7 +184,7 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
         ));
     }
     warnings.extend(ignored.warnings(file));
-    drop(seen);
+    let duplicates = copies.dropped();
 
     let (scan, w) = ((&faces[..], &positions[..], &materials[..]), &mut warnings);
     let triangles = super::tobj_match::match_tobj(file, &for_tobj, &libs, scan, w)?;
@@ -219,29 +199,15 @@ fn parse(name: &str, file: &str, text: &str, resolve: &Resolver) -> Result<Scene
     })
 }
 
-/// The line of an earlier triangle face with the same positions in the
-/// same cyclic order as `face` (a triangle that is not degenerate: those
-/// are left to the shared checks), which is recorded in `seen` when it is
-/// the first.
-fn earlier_copy(
-    face: &ScanFace,
-    positions: &[DVec3],
-    seen: &mut HashMap<[[u64; 3]; 3], usize>,
-) -> Option<usize> {
-    let [a, b, c] = face.vertices[..] else {
-        return None;
-    };
-    let t = [positions[a], positions[b], positions[c]];
-    if degenerate_why(t).is_some() {
-        return None;
-    }
-    match seen.entry(oriented_key(&t)) {
-        std::collections::hash_map::Entry::Occupied(e) => Some(*e.get()),
-        std::collections::hash_map::Entry::Vacant(e) => {
-            e.insert(face.line);
-            None
-        }
-    }
+/// The material a `usemtl` statement at `at` names.
+fn named(by_name: &HashMap<String, usize>, name: &str, at: &str) -> Result<usize, SceneError> {
+    by_name
+        .get(name)
+        .copied()
+        .ok_or_else(|| SceneError::UndefinedMaterial {
+            at: at.to_string(),
+            name: name.into(),
+        })
 }
 
 /// The face statement at `line_no` (`at`) with the vertex `words`, in
