@@ -638,3 +638,16 @@ fn a_position_naming_no_accessor_is_refused() {
         "{err}"
     );
 }
+
+/// What the fuzzing found, kept as a test: a Cornell box with two floor
+/// vertices moved made spade's constrained triangulation panic while the
+/// blocks' contact lines were imprinted on the floor ("Failed to locate
+/// position. This is a bug in spade."). The floor triangle is kept whole
+/// instead, and the scene reads.
+#[test]
+fn a_triangulation_that_fails_inside_spade_keeps_the_triangle() {
+    let dir = scratch("spade");
+    let obj = include_bytes!("data/fuzz-spade.obj");
+    let mtl: Vec<u8> = obj_seeds().iter().flat_map(|s| s.1.clone()).collect();
+    assert_eq!(obj_case(&dir, obj, &mtl), Ok(true));
+}

@@ -150,13 +150,29 @@ pub(crate) fn contact_lines(tris: Vec<RawTriangle>, scale: f64) -> (Vec<RawTrian
     (out, count)
 }
 
+/// [`triangulate_with_spade`], with a panic inside spade taken as a failed
+/// triangulation: spade 2.15 can panic ("Failed to locate position. This
+/// is a bug in spade.") on nearly degenerate constraints, which a mutated
+/// Cornell box reached (found by fuzzing; `crates/radcol-cli/tests/fuzz.rs`).
+fn triangulate(
+    f: &Frame,
+    t: &RawTriangle,
+    segments: &[([f64; 2], [f64; 2])],
+    tol: f64,
+) -> Option<Vec<RawTriangle>> {
+    let attempt = || triangulate_with_spade(f, t, segments, tol);
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(attempt))
+        .ok()
+        .flatten()
+}
+
 /// The constrained triangulation of `t` with `segments` as constraints, in
 /// `t`'s orientation; None when the triangulation fails (the triangle is
 /// then kept whole). Endpoints within `tol` of a corner become the corner;
 /// within `tol` of an edge, a point of that edge, which joins the boundary
 /// polygon (so no sliver forms between a nearly collinear point and the
 /// edge); faces of area below tol² (rounding slivers) are dropped.
-fn triangulate(
+fn triangulate_with_spade(
     f: &Frame,
     t: &RawTriangle,
     segments: &[([f64; 2], [f64; 2])],
