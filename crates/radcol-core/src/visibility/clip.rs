@@ -345,7 +345,7 @@ fn merged(
 }
 
 /// Fan triangulation of a convex polygon, without the triangles whose
-/// area is at rounding level ([`FAN_AREA`]).
+/// area is at rounding level (a thousandth of the smallest piece kept).
 ///
 /// A polygon can repeat a vertex (where a shadow's edge meets the
 /// element's corner), and the fan then holds triangles of no area. They
