@@ -487,34 +487,30 @@ fn glb_seed() -> Vec<u8> {
     glb
 }
 
+/// Fuzzes the glTF reader on `path` (t.gltf or t.glb in a folder holding
+/// t.bin when needed) from `seed`, once the seed is checked to read.
+fn fuzz_gltf(what: &str, path: &Path, seed: Vec<u8>) {
+    // The seed reads: the fuzzing starts from a valid scene.
+    std::fs::write(path, &seed).unwrap();
+    let scene = radcol_core::scene::load_gltf(path).expect("the seed reads");
+    assert_eq!(scene.triangle_count(), 3);
+    fuzz(what, &[seed], GLTF_TOKENS, cases(2000), |doc| {
+        std::fs::write(path, doc).unwrap();
+        no_panic(|| radcol_core::scene::load_gltf(path))
+    });
+}
+
 #[test]
 fn gltf_files_end_in_a_scene_or_an_error() {
     let dir = scratch("gltf");
     let (json, bin) = gltf_seed();
     std::fs::write(dir.join("t.bin"), &bin).unwrap();
-    let path = dir.join("t.gltf");
-    // The seed reads: the fuzzing starts from a valid scene.
-    std::fs::write(&path, &json).unwrap();
-    let scene = radcol_core::scene::load_gltf(&path).expect("the seed reads");
-    assert_eq!(scene.triangle_count(), 3);
-    fuzz("gltf", &[json], GLTF_TOKENS, cases(2000), |doc| {
-        std::fs::write(&path, doc).unwrap();
-        no_panic(|| radcol_core::scene::load_gltf(&path))
-    });
+    fuzz_gltf("gltf", &dir.join("t.gltf"), json);
 }
 
 #[test]
 fn glb_files_end_in_a_scene_or_an_error() {
-    let dir = scratch("glb");
-    let path = dir.join("t.glb");
-    let glb = glb_seed();
-    std::fs::write(&path, &glb).unwrap();
-    let scene = radcol_core::scene::load_gltf(&path).expect("the seed reads");
-    assert_eq!(scene.triangle_count(), 3);
-    fuzz("glb", &[glb], GLTF_TOKENS, cases(2000), |doc| {
-        std::fs::write(&path, doc).unwrap();
-        no_panic(|| radcol_core::scene::load_gltf(&path))
-    });
+    fuzz_gltf("glb", &scratch("glb").join("t.glb"), glb_seed());
 }
 
 const CSV_TOKENS: &[&str] = &[
