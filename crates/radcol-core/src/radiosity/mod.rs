@@ -40,7 +40,8 @@ use crate::problem::Problem;
 use crate::progress::ProgressHandle;
 use crate::query::{PointEvaluator, PointValues, QueryPoint, DEFAULT_SNAP};
 use crate::render::{render_scene, Corners, Image, RenderOptions, VertexMesh};
-use crate::run::adapt::{solve_adaptive, AdaptOptions, AdaptStep, StopReason};
+use crate::run::adapt::{resume_adaptive, solve_adaptive, AdaptOptions, AdaptStep};
+use crate::run::adapt::{Resume, Resumed, StopReason};
 use crate::run::{solve, ChannelResult, Relighter, SolveConfig, SolveOutcome};
 use crate::scene::{MaterialChange, Scene};
 use crate::solution::Solution;
@@ -117,6 +118,9 @@ pub struct Radiosity {
     config: SolveConfig,
     outcome: SolveOutcome,
     refinement: Option<Refinement>,
+    /// The adaptive loop's options and where it stands; None without a
+    /// target.
+    adapt: Option<(AdaptOptions, Resume)>,
     /// The channels after [`Radiosity::relight`]; None: the solve's.
     relit: Option<Vec<ChannelResult>>,
     evaluator: OnceLock<PointEvaluator>,
@@ -156,15 +160,19 @@ impl Radiosity {
         if !problem.emits() {
             return Err(InputError::NoEmission.into());
         }
-        let (outcome, refinement) = match adapt {
-            None => (solve(&problem, &config, backend)?, None),
+        let (outcome, refinement, adapt) = match adapt {
+            None => (solve(&problem, &config, backend)?, None, None),
             Some(opts) => {
                 let res = solve_adaptive(&problem, &config, opts, backend, |_| {})?;
                 let refinement = Refinement {
                     steps: res.steps,
                     stop: res.stop,
                 };
-                (res.outcome, Some(refinement))
+                (
+                    res.outcome,
+                    Some(refinement),
+                    Some((opts.clone(), res.resume)),
+                )
             }
         };
         Ok(Self {
@@ -173,9 +181,73 @@ impl Radiosity {
             config,
             outcome,
             refinement,
+            adapt,
             relit: None,
             evaluator: OnceLock::new(),
         })
+    }
+
+    /// Refines further, from the mesh solved on, until the estimate is
+    /// below `target` (relative to max |u|, as [`Settings::target_error`])
+    /// or a budget stops it, as the adaptive loop would have gone on: its
+    /// new steps are appended to [`Radiosity::refinement`]. The first
+    /// split is decided by the estimate at hand; after a relight, or
+    /// without an estimate, the current mesh is solved again first, under
+    /// the current lights. Nothing changes on an error
+    /// ([`crate::error::Error::Cancelled`] included).
+    pub fn refine(&mut self, target: f64) -> Result<&Refinement, Error> {
+        self.refine_on(target, &CpuBackend)
+    }
+
+    /// [`Radiosity::refine`] with the assembly on `backend`.
+    pub fn refine_on(
+        &mut self,
+        target: f64,
+        backend: &dyn AssemblyBackend,
+    ) -> Result<&Refinement, Error> {
+        let (opts, fresh) = match &self.adapt {
+            Some((opts, _)) => (
+                AdaptOptions {
+                    target,
+                    ..opts.clone()
+                },
+                None,
+            ),
+            None => {
+                let opts = AdaptOptions {
+                    target,
+                    graded_start: false,
+                    ..AdaptOptions::default()
+                };
+                let fresh = Resume::fresh(&self.outcome, &self.config, &opts, backend)?;
+                (opts, Some(fresh))
+            }
+        };
+        let resume = fresh.as_ref().or(self.adapt.as_ref().map(|a| &a.1));
+        let resume = resume.expect("a loop's state or a fresh one");
+        let from = (&self.outcome, self.channels());
+        let (p, c) = (&self.problem, &self.config);
+        let resumed = resume_adaptive(p, c, &opts, backend, from.0, from.1, resume, |_| {})?;
+        let refinement = self.refinement.get_or_insert(Refinement {
+            steps: Vec::new(),
+            stop: StopReason::Reached,
+        });
+        match resumed {
+            Resumed::Stands { stop, .. } => {
+                refinement.stop = stop;
+                let resume = fresh.or(self.adapt.take().map(|a| a.1));
+                self.adapt = resume.map(|r| (opts, r));
+            }
+            Resumed::Refined(res) => {
+                refinement.steps.extend(res.steps);
+                refinement.stop = res.stop;
+                self.outcome = res.outcome;
+                self.adapt = Some((opts, res.resume));
+                self.relit = None;
+                self.evaluator = OnceLock::new();
+            }
+        }
+        Ok(refinement)
     }
 
     /// The scene, with its materials as last relit.

@@ -343,3 +343,148 @@ fn a_written_gltf_loads_again() {
         "{a:?} {b:?} × {m}"
     );
 }
+
+/// Four points away from the blocks' feet: floor, right wall, ceiling.
+fn four_points() -> Vec<QueryPoint> {
+    [
+        DVec3::new(276.72, 0.0, 61.3),
+        DVec3::new(520.02, 0.0, 501.11),
+        DVec3::new(555.42, 448.64, 303.1),
+        DVec3::new(279.28, 548.8, 62.04),
+    ]
+    .map(|position| QueryPoint {
+        position,
+        normal: None,
+    })
+    .to_vec()
+}
+
+/// Refining a solve to a smaller target continues its loop: new steps on
+/// a larger mesh, the estimate at the stop below the new target (away from
+/// the points it names), and values that agree, within the two estimates,
+/// with a solve made for that target from the start (another path through
+/// the loop, to another mesh).
+#[test]
+fn refining_to_a_smaller_target_continues_the_loop() {
+    let mut solved = solved();
+    let steps = solved.refinement().expect("adaptive").steps.len();
+    let unknowns = solved.outcome().discretization.len();
+    let target = 1e-2;
+    let refinement = solved.refine(target).expect("refines").clone();
+    assert!(refinement.steps.len() > steps);
+    let last = refinement.steps.last().unwrap();
+    match refinement.stop {
+        StopReason::Reached => assert!(last.estimate_shown <= target),
+        StopReason::Singular => assert!(last.estimate_elsewhere <= target),
+        other => panic!("stopped: {other}"),
+    }
+    assert!(solved.outcome().discretization.len() > unknowns);
+
+    let direct = Radiosity::solve(cornell(), &Settings::target(target)).expect("solves");
+    let points = four_points();
+    let (a, b) = (
+        solved.query(&points).unwrap(),
+        direct.query(&points).unwrap(),
+    );
+    for (p, q) in a.iter().zip(&b) {
+        for (x, y) in p.channels.iter().zip(&q.channels) {
+            let (ex, ey) = (x.estimate.unwrap(), y.estimate.unwrap());
+            assert!((x.u - y.u).abs() <= ex + ey, "u_n {} {}", x.u, y.u);
+            let (ix, iy) = (x.iterated_estimate.unwrap(), y.iterated_estimate.unwrap());
+            let d = (x.iterated - y.iterated).abs();
+            assert!(d <= ix + iy, "û_n {} {}", x.iterated, y.iterated);
+        }
+    }
+}
+
+/// A target already met solves nothing: the same mesh, the same values,
+/// the loop's stop "reached".
+#[test]
+fn refining_to_a_target_already_met_changes_nothing() {
+    let mut solved = solved();
+    let steps = solved.refinement().unwrap().steps.len();
+    let points = four_points();
+    let before = solved.query(&points).unwrap();
+    let unknowns = solved.outcome().discretization.len();
+    let refinement = solved.refine(0.5).expect("stands");
+    assert_eq!(
+        (refinement.steps.len(), refinement.stop),
+        (steps, StopReason::Reached)
+    );
+    assert_eq!(solved.outcome().discretization.len(), unknowns);
+    let after = solved.query(&points).unwrap();
+    for (p, q) in before.iter().zip(&after) {
+        for (x, y) in p.channels.iter().zip(&q.channels) {
+            assert_eq!((x.u, x.iterated), (y.u, y.iterated));
+        }
+    }
+}
+
+/// After a relight, refining solves the current lights on the current
+/// mesh first. With the light doubled and a target the mesh already
+/// meets, that is one step on the same mesh whose values are twice the
+/// first solve's (the system is linear in E), with an estimate again.
+#[test]
+fn refining_after_a_relight_solves_the_new_lights() {
+    let mut solved = solved();
+    let name = light_name(solved.scene());
+    let light = solved.scene().materials.iter().find(|m| m.name == name);
+    let e = light.unwrap().emission;
+    let points = four_points();
+    let first = solved.query(&points).unwrap();
+    let unknowns = solved.outcome().discretization.len();
+    let steps = solved.refinement().unwrap().steps.len();
+    solved
+        .relight(&[(&name, MaterialChange::Emission(e.map(|x| 2.0 * x)))])
+        .unwrap();
+    let refinement = solved.refine(0.1).expect("solves");
+    assert_eq!(
+        (refinement.steps.len(), refinement.stop),
+        (steps + 1, StopReason::Reached)
+    );
+    assert_eq!(solved.outcome().discretization.len(), unknowns);
+    let max_u = solved.outcome().channels.iter().map(|c| {
+        c.solution
+            .nodal()
+            .iter()
+            .fold(0.0f64, |a, &b| a.max(b.abs()))
+    });
+    let max_u = max_u.fold(0.0, f64::max);
+    let doubled = solved.query(&points).unwrap();
+    for (p, q) in first.iter().zip(&doubled) {
+        for (x, y) in p.channels.iter().zip(&q.channels) {
+            assert!((y.u - 2.0 * x.u).abs() <= 1e-8 * max_u, "{} {}", x.u, y.u);
+            assert!((y.iterated - 2.0 * x.iterated).abs() <= 1e-8 * max_u);
+            assert!(y.estimate.is_some());
+        }
+    }
+}
+
+/// A refine cancelled through the solve's progress handle returns
+/// `Cancelled` and leaves the solved scene as it was.
+#[test]
+fn a_cancelled_refine_changes_nothing() {
+    let cancel = Cancel::new();
+    let settings = Settings::target(0.1).with_progress(cancel.handle());
+    let mut solved = Radiosity::solve(cornell(), &settings).expect("solves");
+    let points = four_points();
+    let before = solved.query(&points).unwrap();
+    let (unknowns, steps) = (
+        solved.outcome().discretization.len(),
+        solved.refinement().unwrap().steps.len(),
+    );
+    cancel.cancel();
+    let err = solved.refine(1e-2).unwrap_err();
+    assert!(
+        matches!(err, Error::Solve(crate::error::Error::Cancelled { .. })),
+        "{err}"
+    );
+    assert_eq!(solved.outcome().discretization.len(), unknowns);
+    assert_eq!(solved.refinement().unwrap().steps.len(), steps);
+    let after = solved.query(&points).unwrap();
+    for (p, q) in before.iter().zip(&after) {
+        for (x, y) in p.channels.iter().zip(&q.channels) {
+            assert_eq!((x.u, x.iterated), (y.u, y.iterated));
+        }
+    }
+}

@@ -25,12 +25,14 @@ mod history;
 pub mod hp;
 mod next;
 mod options;
+mod resume;
 
 pub use history::{singular_points, SingularPoint, STALL_RATIO};
 pub use options::{
     AdaptOptions, ESTIMATE_WITHIN, MARK_FRACTION, MAX_FRACTION, MIN_SIZE, MIN_TARGET,
     STALL_GENERATIONS,
 };
+pub use resume::{resume_adaptive, Resume, Resumed};
 
 use super::pipeline::{solve_step, PerElement, Plans, Previous};
 use super::{discretize, visibility_budget_for, OperatorKind, SolveConfig, SolveOutcome, Timings};
@@ -135,6 +137,9 @@ pub struct AdaptOutcome {
     /// Where the last step's estimate is above the target on elements that
     /// are no longer split, largest first (empty when none is).
     pub singular: Vec<SingularPoint>,
+    /// Where the loop stands, to refine the final mesh further
+    /// ([`resume_adaptive`]).
+    pub resume: Resume,
 }
 
 /// Solves `problem` from the mesh `cfg` describes, refining where the
@@ -147,17 +152,60 @@ pub fn solve_adaptive(
     backend: &dyn AssemblyBackend,
     mut on_step: impl FnMut(&AdaptStep),
 ) -> Result<AdaptOutcome, Error> {
+    let cfg = checked(problem, cfg, opts, backend)?;
+    let mesh = discretize(problem, &cfg)?.mesh().clone();
+    // With hp or a graded start, every element's degree and how it came to be.
+    let degrees = Degrees::start(&cfg, &mesh, opts, backend)?;
+    let history = History::new(mesh.len(), opts.stall_generations as usize);
+    let start = Start {
+        mesh,
+        degrees,
+        history,
+        guess: None,
+    };
+    run(problem, &cfg, opts, backend, start, &mut on_step)
+}
+
+/// `cfg` as every step solves with it, once `opts`, `problem` and
+/// `backend` are checked.
+fn checked(
+    problem: &Problem,
+    cfg: &SolveConfig,
+    opts: &AdaptOptions,
+    backend: &dyn AssemblyBackend,
+) -> Result<SolveConfig, Error> {
     opts.check()?;
     if !problem.emits() {
         return Err(InputError::NoEmission.into());
     }
     hp::check_backend(opts.hp, backend)?;
-    let cfg = step_config(problem, cfg, opts);
-    let mut mesh = discretize(problem, &cfg)?.mesh().clone();
-    // With hp or a graded start, every element's degree and how it came to be.
-    let mut degrees = Degrees::start(&cfg, &mesh, opts, backend)?;
-    let mut guess: Option<Vec<Vec<f64>>> = None;
-    let mut history = History::new(mesh.len(), opts.stall_generations as usize);
+    Ok(step_config(problem, cfg, opts))
+}
+
+/// Where the loop starts: a mesh, its elements' degrees (with hp or a
+/// graded start), their estimate history and GMRES's start.
+struct Start {
+    mesh: Arc<Mesh>,
+    degrees: Option<Degrees>,
+    history: History,
+    guess: Option<Vec<Vec<f64>>>,
+}
+
+/// The loop from `start`: solve, assess, split, until a stop.
+fn run(
+    problem: &Problem,
+    cfg: &SolveConfig,
+    opts: &AdaptOptions,
+    backend: &dyn AssemblyBackend,
+    start: Start,
+    on_step: &mut dyn FnMut(&AdaptStep),
+) -> Result<AdaptOutcome, Error> {
+    let Start {
+        mut mesh,
+        mut degrees,
+        mut history,
+        mut guess,
+    } = start;
     let floor = opts.min_size * diagonal(&mesh);
     let mut steps = Vec::new();
     // The previous solve, its plans and which elements it shares with this
@@ -170,75 +218,120 @@ pub fn solve_adaptive(
         let t = Instant::now();
         let per_element = degrees.as_ref().map(|d| (d.sets(), d.degrees()));
         let step = (mesh.clone(), per_element, guess.as_deref());
-        let Some((out, plans)) = solve_or_stand(problem, &cfg, opts, backend, step, &previous)?
+        let Some((out, plans)) = solve_or_stand(problem, cfg, opts, backend, step, &previous)?
         else {
             // The step's peak (matrix, check rows, solver) would not fit,
             // although the budget let its matrices in: the previous step's
             // answer stands, as at any other budget stop.
-            let (outcome, _, _) = previous.take().expect("refused after a step");
+            let (outcome, _, _, resume) = previous.take().expect("refused after a step");
             return Ok(AdaptOutcome {
                 outcome,
                 steps,
                 stop: StopReason::Memory,
                 singular: pending_singular,
+                resume,
             });
         };
         // The previous solve has served: its matrix goes before the next one.
         drop(previous.take());
-        let (indicator, negative) = indicators(&out);
-        let stalls = history.stalls(&indicator);
-        let smallest = |k: usize| longest_edge(out.discretization.mesh(), k) < floor;
-        let frozen = |k: usize| smallest(k) || History::stalled(k, &stalls, opts.stall_generations);
-        let mut step = describe(&out, &indicator, &negative, &frozen, opts);
+        let Assessment {
+            mut step,
+            stop,
+            marked,
+            indicator,
+            negative,
+            singular,
+        } = assess(&out, &history, (cfg, opts, floor), steps.len() + 1);
         step.seconds = t.elapsed().as_secs_f64();
-        let marking = Marking {
-            indicator: &indicator,
-            frozen: &frozen,
-            // One more stalled split freezes these.
-            stalling: &|k| stalls[k] > 0 && stalls[k] + 1 >= opts.stall_generations,
-        };
-        let shown = step.estimate_shown;
-        let disc = &out.discretization;
-        // Splitting element k adds at most 3 f_{r_k} unknowns (a raise or a
-        // lowering adds fewer).
-        let grows = |k: usize| 3 * disc.nodes_per(k);
-        let size: (_, _, &dyn Fn(usize) -> usize) = (mesh.len(), disc.len(), &grows);
-        let (stop, marked, split) = decide(opts, &cfg, (shown, steps.len() + 1), &marking, size);
-        step.split = split;
         on_step(&step);
         steps.push(step);
-        let left: Vec<usize> = (0..indicator.len())
-            .filter(|&k| frozen(k) && indicator[k] > opts.target)
-            .collect();
-        let singular = singular_points(out.discretization.mesh(), &left, &indicator, &smallest);
         if let Some(stop) = stop {
             return Ok(AdaptOutcome {
                 outcome: out,
                 steps,
                 stop,
                 singular,
+                resume: Resume { history, degrees },
             });
         }
-        let marked = &marked[..split];
         let next = carry(
             &out,
-            marked,
+            &marked,
             (&indicator, &negative),
             degrees.as_ref(),
             &history,
         );
-        (mesh, guess, history, degrees) = (next.mesh, Some(next.guess), next.history, next.degrees);
-        previous = Some((out, plans, next.unchanged));
+        let resume = Resume {
+            history: std::mem::replace(&mut history, next.history),
+            degrees: std::mem::replace(&mut degrees, next.degrees),
+        };
+        (mesh, guess) = (next.mesh, Some(next.guess));
+        previous = Some((out, plans, next.unchanged, resume));
         pending_singular = singular;
+    }
+}
+
+/// What a solve tells the loop: the step as reported, whether to stop,
+/// the elements to split (worst first), every element's indicator and
+/// negative flag, and where the error stays.
+struct Assessment {
+    step: AdaptStep,
+    stop: Option<StopReason>,
+    marked: Vec<usize>,
+    indicator: Vec<f64>,
+    negative: Vec<bool>,
+    singular: Vec<SingularPoint>,
+}
+
+/// The assessment of `out`, the `step_no`-th step, given the elements'
+/// estimate `history`; `floor`: the smallest size split. `seconds` is
+/// left at 0.
+fn assess(
+    out: &SolveOutcome,
+    history: &History,
+    (cfg, opts, floor): (&SolveConfig, &AdaptOptions, f64),
+    step_no: usize,
+) -> Assessment {
+    let (indicator, negative) = indicators(out);
+    let stalls = history.stalls(&indicator);
+    let smallest = |k: usize| longest_edge(out.discretization.mesh(), k) < floor;
+    let frozen = |k: usize| smallest(k) || History::stalled(k, &stalls, opts.stall_generations);
+    let mut step = describe(out, &indicator, &negative, &frozen, opts);
+    let marking = Marking {
+        indicator: &indicator,
+        frozen: &frozen,
+        // One more stalled split freezes these.
+        stalling: &|k| stalls[k] > 0 && stalls[k] + 1 >= opts.stall_generations,
+    };
+    let shown = step.estimate_shown;
+    let disc = &out.discretization;
+    // Splitting element k adds at most 3 f_{r_k} unknowns (a raise or a
+    // lowering adds fewer).
+    let grows = |k: usize| 3 * disc.nodes_per(k);
+    let size: (_, _, &dyn Fn(usize) -> usize) = (disc.mesh().len(), disc.len(), &grows);
+    let (stop, mut marked, split) = decide(opts, cfg, (shown, step_no), &marking, size);
+    step.split = split;
+    marked.truncate(split);
+    let left: Vec<usize> = (0..indicator.len())
+        .filter(|&k| frozen(k) && indicator[k] > opts.target)
+        .collect();
+    let singular = singular_points(disc.mesh(), &left, &indicator, &smallest);
+    Assessment {
+        step,
+        stop,
+        marked,
+        indicator,
+        negative,
+        singular,
     }
 }
 
 /// A step's mesh, its degrees (with hp) and GMRES's start.
 type StepInput<'a> = (Arc<Mesh>, Option<PerElement<'a>>, Option<&'a [Vec<f64>]>);
 
-/// The previous solve, its plans and which elements the next mesh shares
-/// with it.
-type Held = (SolveOutcome, Plans, Arc<Unchanged>);
+/// The previous solve, its plans, which elements the next mesh shares
+/// with it, and where the loop stood after it.
+type Held = (SolveOutcome, Plans, Arc<Unchanged>, Resume);
 
 /// The step on `mesh` (with a degree per element when given, from `guess`),
 /// reusing what `previous` has; None when its peak would not fit after a
@@ -253,7 +346,7 @@ fn solve_or_stand(
 ) -> Result<Option<(SolveOutcome, Plans)>, Error> {
     let prev = previous
         .as_ref()
-        .map(|(outcome, plans, unchanged)| Previous {
+        .map(|(outcome, plans, unchanged, _)| Previous {
             outcome,
             plans,
             unchanged: unchanged.clone(),
