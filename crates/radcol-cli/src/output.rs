@@ -1,7 +1,7 @@
 //! Files the CLI writes: the nodal CSV, images and vertex meshes, and the
 //! overwrite rule shared by every file.
 
-use crate::files::{create, Staged};
+use crate::files::create;
 use crate::lightmap;
 use crate::objects::layout;
 use crate::progress::Bar;
@@ -14,7 +14,6 @@ use radcol_core::mesh::Mesh;
 use radcol_core::render::{self, Image, VertexMesh};
 use radcol_core::run::SolveOutcome;
 use radcol_core::solution::Solution;
-use std::io::Write;
 use std::time::Instant;
 
 /// Writes every `--out` file, rendering the image and tessellating the
@@ -175,18 +174,6 @@ fn write_error_map(o: &Output, look: &Look, out: &SolveOutcome, t: Instant) -> R
     })
 }
 
-/// Column names of the channels: `u` for one channel, `u_<name>` otherwise.
-pub fn channel_columns(out: &SolveOutcome) -> Vec<String> {
-    if out.channels.len() == 1 {
-        vec!["u".into()]
-    } else {
-        out.channels
-            .iter()
-            .map(|c| format!("u_{}", c.name))
-            .collect()
-    }
-}
-
 /// A per-element value at every vertex of `vm` (through its triangles).
 fn vertex_values(vm: &radcol_core::render::VertexMesh, per_element: &[f64]) -> Vec<f32> {
     let mut v = vec![0.0f32; vm.vertex_count()];
@@ -196,15 +183,6 @@ fn vertex_values(vm: &radcol_core::render::VertexMesh, per_element: &[f64]) -> V
         }
     }
     v
-}
-
-/// The estimate columns (one per channel, like [`channel_columns`]): the
-/// element's estimated max error, absolute.
-fn estimate_columns(out: &SolveOutcome) -> Vec<String> {
-    channel_columns(out)
-        .into_iter()
-        .map(|c| format!("{c}_error_estimate"))
-        .collect()
 }
 
 /// Per element, the worst channel's estimated max error relative to its
@@ -219,37 +197,12 @@ pub fn element_estimates(out: &SolveOutcome) -> Option<Vec<f64>> {
     Some(worst)
 }
 
-/// Writes one row per collocation node: `element,node,x,y,z,u…` and, when
-/// the solve was estimated, `u…_error_estimate` (the element's estimated max
-/// error, absolute), every value in Rust's shortest round-trip form.
+/// Writes one row per collocation node ([`export::csv::write_nodes`]).
 /// Returns the number of rows.
 pub fn write_csv(file: &OutputFile, out: &SolveOutcome) -> Result<usize> {
     let mut w = create(file)?;
-    let estimated = out.channels.iter().all(|c| c.estimate.is_some());
-    let write = |w: &mut Staged| -> std::io::Result<usize> {
-        let mut columns = channel_columns(out);
-        if estimated {
-            columns.extend(estimate_columns(out));
-        }
-        writeln!(w, "element,node,x,y,z,{}", columns.join(","))?;
-        let points = out.discretization.points();
-        for (i, p) in points.iter().enumerate() {
-            write!(
-                w,
-                "{},{},{:e},{:e},{:e}",
-                p.element, p.node, p.position.x, p.position.y, p.position.z
-            )?;
-            for ch in &out.channels {
-                write!(w, ",{:e}", ch.solution.nodal()[i])?;
-            }
-            for e in out.channels.iter().filter_map(|c| c.estimate.as_ref()) {
-                write!(w, ",{:e}", e.elements[p.element])?;
-            }
-            writeln!(w)?;
-        }
-        Ok(points.len())
-    };
-    let rows = write(&mut w).with_context(|| format!("writing {}", file.path.display()))?;
+    let rows = export::csv::write_nodes(&mut w, &out.discretization, &out.channels)
+        .with_context(|| format!("writing {}", file.path.display()))?;
     w.commit()?;
     Ok(rows)
 }

@@ -45,9 +45,9 @@ pub use crate::solution::Solution;
 pub use glam::{self, DVec3};
 
 pub use crate::progress::Cancel;
-#[cfg(feature = "export")]
-pub use crate::radiosity::MeshFormat;
 pub use crate::radiosity::{CornerValues, Error, Radiosity, Refinement, Settings};
+#[cfg(feature = "export")]
+pub use crate::radiosity::{Lightmap, LightmapFormat, MeshFormat};
 pub use crate::scene::MaterialChange;
 use std::path::Path;
 

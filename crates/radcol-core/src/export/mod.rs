@@ -1,8 +1,8 @@
 //! Writers for what people look at: 8-bit PNG images, linear EXR images,
-//! per-vertex meshes as PLY and glTF 2.0, and glTF scenes with their
-//! lightmaps.
+//! per-vertex meshes as PLY and glTF 2.0, glTF scenes with their
+//! lightmaps, and the nodal values as CSV.
 //!
-//! Every writer takes plain data ([`crate::render::Image`], tone-mapped
+//! Every writer takes the data it writes ([`crate::render::Image`], tone-mapped
 //! pixels, [`crate::render::VertexMesh`]) and any `Write`: the caller opens
 //! the file (and decides whether an existing one may be replaced).
 
@@ -13,6 +13,7 @@ macro_rules! bail {
     };
 }
 
+pub mod csv;
 pub mod exr;
 pub mod gltf;
 pub mod lightmapped;

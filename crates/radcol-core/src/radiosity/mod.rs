@@ -25,10 +25,14 @@
 mod corners;
 mod error;
 #[cfg(feature = "export")]
+mod lightmap;
+#[cfg(feature = "export")]
 mod write;
 
 pub use corners::CornerValues;
 pub use error::Error;
+#[cfg(feature = "export")]
+pub use lightmap::{Lightmap, LightmapFormat};
 #[cfg(feature = "export")]
 pub use write::MeshFormat;
 
@@ -239,6 +243,7 @@ impl Radiosity {
                 self.adapt = resume.map(|r| (opts, r));
             }
             Resumed::Refined(res) => {
+                let res = *res;
                 refinement.steps.extend(res.steps);
                 refinement.stop = res.stop;
                 self.outcome = res.outcome;

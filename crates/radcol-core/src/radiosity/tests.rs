@@ -488,3 +488,110 @@ fn a_cancelled_refine_changes_nothing() {
         }
     }
 }
+
+/// The lightmap follows the current lights (linear in E: twice the light,
+/// twice every texel; no light, none), and its files read back: the GLB by
+/// the gltf crate with every input triangle, texture coordinates in the
+/// unit square and the atlas as its image; the PNG and EXR by their magic
+/// numbers.
+#[test]
+fn the_lightmap_follows_the_lights_and_its_files_read_back() {
+    use crate::render::lightmap::Resolution;
+    let mut solved = solved();
+    let first = solved.bake_lightmap(Resolution::Size(64), true).unwrap();
+    assert_eq!((first.image.width, first.image.height), (64, 64));
+    let lit = first.image.rgb.iter().filter(|p| p[0] > 0.0).count();
+    assert!(lit > 64 * 64 / 4, "{lit} lit texels");
+    let name = light_name(solved.scene());
+    let light = solved.scene().materials.iter().find(|m| m.name == name);
+    let e = light.unwrap().emission;
+    solved
+        .relight(&[(&name, MaterialChange::Emission(e.map(|x| 2.0 * x)))])
+        .unwrap();
+    let doubled = solved.bake_lightmap(Resolution::Size(64), true).unwrap();
+    let max = first
+        .image
+        .rgb
+        .iter()
+        .flatten()
+        .fold(0.0f32, |a, &b| a.max(b));
+    for (a, b) in first.image.rgb.iter().zip(&doubled.image.rgb) {
+        for (x, y) in a.iter().zip(b) {
+            assert!((y - 2.0 * x).abs() <= 1e-6 * max, "{x} {y}");
+        }
+    }
+    solved
+        .relight(&[(&name, MaterialChange::Emission([0.0; 3]))])
+        .unwrap();
+    let dark = solved.bake_lightmap(Resolution::Size(64), true).unwrap();
+    assert!(dark.image.rgb.iter().flatten().all(|&x| x == 0.0));
+
+    let tone = crate::render::ToneMap::default();
+    let mut glb = Vec::new();
+    solved
+        .write_lightmap(&first, &mut glb, LightmapFormat::Glb, &tone)
+        .unwrap();
+    let (doc, buffers, images) = gltf::import_slice(&glb).expect("a valid GLB");
+    assert_eq!(
+        (images.len(), images[0].width, images[0].height),
+        (1, 64, 64)
+    );
+    let mut triangles = 0;
+    for mesh in doc.meshes() {
+        for prim in mesh.primitives() {
+            let reader = prim.reader(|b| Some(&buffers[b.index()]));
+            triangles += reader.read_indices().unwrap().into_u32().count() / 3;
+            let uvs = reader.read_tex_coords(0).expect("texture coordinates");
+            assert!(uvs.into_f32().flatten().all(|t| (0.0..=1.0).contains(&t)));
+        }
+    }
+    assert_eq!(triangles, solved.scene().triangle_count());
+    let mut png = Vec::new();
+    solved
+        .write_lightmap(&first, &mut png, LightmapFormat::Png, &tone)
+        .unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    let mut exr = Vec::new();
+    solved
+        .write_lightmap(&first, &mut exr, LightmapFormat::Exr, &tone)
+        .unwrap();
+    assert_eq!(&exr[..4], &[0x76, 0x2f, 0x31, 0x01]);
+}
+
+/// The nodes' CSV holds one row per unknown with u_n as computed (read
+/// back bit for bit) and the estimate columns while the solve's estimate
+/// stands; after a relight, the new values and no estimate.
+#[test]
+fn the_nodes_csv_reads_back() {
+    let mut solved = solved();
+    let read = |solved: &Radiosity| {
+        let mut csv = Vec::new();
+        let rows = solved.write_nodes_csv(&mut csv).unwrap();
+        let text = String::from_utf8(csv).unwrap();
+        let mut lines = text.lines();
+        let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+        let body: Vec<Vec<f64>> = lines
+            .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+            .collect();
+        assert_eq!(body.len(), rows);
+        (header, body)
+    };
+    let (header, body) = read(&solved);
+    assert_eq!(body.len(), solved.outcome().discretization.len());
+    assert_eq!(header.len(), 5 + 3 + 3, "{header:?}");
+    assert!(header[5].starts_with("u_") && header[8].ends_with("_error_estimate"));
+    for (c, ch) in solved.channels().iter().enumerate() {
+        let estimate = &ch.estimate.as_ref().unwrap().elements;
+        for (row, &u) in body.iter().zip(ch.solution.nodal()) {
+            assert_eq!(row[5 + c], u);
+            assert_eq!(row[8 + c], estimate[row[0] as usize]);
+        }
+    }
+    let name = light_name(solved.scene());
+    solved
+        .relight(&[(&name, MaterialChange::Emission([0.0; 3]))])
+        .unwrap();
+    let (header, body) = read(&solved);
+    assert_eq!(header.len(), 5 + 3);
+    assert!(body.iter().all(|row| row[5..].iter().all(|&u| u == 0.0)));
+}

@@ -59,7 +59,7 @@ pub enum Resumed {
         singular: Vec<SingularPoint>,
     },
     /// New steps were solved; the steps listed are the new ones.
-    Refined(AdaptOutcome),
+    Refined(Box<AdaptOutcome>),
 }
 
 /// Refines `from`, a solve of `problem` with `cfg` whose loop stands at
@@ -134,6 +134,6 @@ pub fn resume_adaptive(
             stop: StopReason::Memory,
             singular: stands,
         }),
-        r => r.map(Resumed::Refined),
+        r => r.map(|out| Resumed::Refined(Box::new(out))),
     }
 }
