@@ -13,6 +13,7 @@ mod circles;
 mod contact;
 mod cost;
 mod discontinuity;
+mod edge;
 mod edges;
 mod ellipsoid_orders;
 mod estimate;

@@ -5,7 +5,7 @@
 
 use crate::args::{BackendArg, PrecisionArg};
 use clap::ValueEnum;
-use radcol_core::assembly::AssemblyBackend;
+use radcol_core::prelude::AssemblyBackend;
 
 /// The flag's value as written ("cpu", "gpu", "auto").
 pub fn name(b: BackendArg) -> String {
@@ -41,7 +41,7 @@ pub fn select_backend(
     backend: BackendArg,
     precision: PrecisionArg,
 ) -> Result<Box<dyn AssemblyBackend>, String> {
-    use radcol_core::assembly::{BackendKind, CpuBackend, Scalar};
+    use radcol_core::prelude::{BackendKind, CpuBackend, Scalar};
     if backend == BackendArg::Gpu {
         return Err(
             "this radcol was built without the `gpu` cargo feature (no wgpu); \
@@ -50,7 +50,7 @@ pub fn select_backend(
         );
     }
     if precision == PrecisionArg::F32 {
-        return Err(radcol_core::error::InputError::Precision {
+        return Err(radcol_core::run::InputError::Precision {
             backend: BackendKind::Cpu,
             supported: Scalar::F64,
             asked: Scalar::F32,
@@ -63,7 +63,7 @@ pub fn select_backend(
 #[cfg(all(test, not(feature = "gpu")))]
 mod tests {
     use super::*;
-    use radcol_core::assembly::BackendKind;
+    use radcol_core::prelude::BackendKind;
 
     /// Without the gpu feature: auto and cpu assemble on the CPU; gpu and
     /// f32 are refused, saying why.

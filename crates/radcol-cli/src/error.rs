@@ -1,7 +1,7 @@
 //! The CLI's one error policy: bad input exits with 2, anything else with 1,
 //! and either way exactly one line `error: ...` goes to stderr.
 
-use radcol_core::error::{Error as CoreError, InputError};
+use radcol_core::run::{Error as CoreError, InputError};
 use std::fmt;
 
 /// Exit code for bad input (arguments, scenes, expressions, values, files in the way).

@@ -9,10 +9,8 @@ use crate::setup::Look;
 use crate::validate::{Output, OutputKind};
 use anyhow::{Context, Result};
 use radcol_core::export;
-use radcol_core::mesh::Mesh;
-use radcol_core::render::lightmap::{bake, Atlas, Resolution};
-use radcol_core::render::{tone_map, Image};
-use radcol_core::solution::Solution;
+use radcol_core::render::{lightmap::bake, lightmap::Atlas, lightmap::Resolution, tone_map, Image};
+use radcol_core::run::{Mesh, Solution};
 use std::io::Write;
 
 /// A baked lightmap: the atlas, its radiance and its tone-mapped PNG.

@@ -2,7 +2,7 @@
 
 use crate::setup::Look;
 use radcol_core::export::gltf::Layout;
-use radcol_core::mesh::Mesh;
+use radcol_core::run::Mesh;
 
 /// The glTF nodes of `mesh` as `look` asks: one per object, or one.
 pub fn layout(mesh: &Mesh, look: &Look) -> Layout {

@@ -10,10 +10,8 @@ use crate::setup::Look;
 use crate::validate::{Output, OutputFile, OutputKind};
 use anyhow::{Context, Result};
 use radcol_core::export;
-use radcol_core::mesh::Mesh;
 use radcol_core::render::{self, Image, VertexMesh};
-use radcol_core::run::SolveOutcome;
-use radcol_core::solution::Solution;
+use radcol_core::run::{Mesh, Solution, SolveOutcome};
 use std::time::Instant;
 
 /// Writes every `--out` file, rendering the image and tessellating the

@@ -6,8 +6,7 @@
 //! whole decades, a legend in each.
 
 use plotters::prelude::*;
-use radcol_core::study::speed::{Refinement, Setting};
-use radcol_core::study::StudyRow;
+use radcol_core::study::{speed::Refinement, speed::Setting, StudyRow};
 
 const WIDTH: u32 = 960;
 const HEIGHT: u32 = 520;

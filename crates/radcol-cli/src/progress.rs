@@ -4,7 +4,7 @@
 //! before took), on a terminal or not.
 
 use indicatif::{ProgressBar, ProgressStyle};
-use radcol_core::progress::{Progress, ProgressHandle};
+use radcol_core::prelude::{Progress, ProgressHandle};
 use std::io::IsTerminal;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};

@@ -1,7 +1,7 @@
 //! Scene names on the command line -> core surfaces and material scenes.
 
 use crate::error::{bad_input, BadInput};
-use radcol_core::geometry::{shapes, Surface};
+use radcol_core::run::{shapes, Surface};
 use radcol_core::scene::{builtin, load_gltf, load_obj, Scene, BUILTIN_SCENES};
 use std::path::PathBuf;
 use std::sync::Arc;

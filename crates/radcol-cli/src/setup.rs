@@ -7,12 +7,12 @@ use crate::error::bad_input;
 use crate::scene::{Loaded, SceneSpec};
 use crate::validate::{AlphaSpec, LookSpec, OutputFile, ProblemSpec};
 use anyhow::Result;
-use radcol_core::alpha0::{find_alpha0, Alpha0Report};
-use radcol_core::assembly::AssemblyBackend;
-use radcol_core::camera::Camera;
-use radcol_core::problem::{Field, Problem, ReferenceOperator};
-use radcol_core::render::{RenderOptions, ToneMap};
-use radcol_core::run::{SolveConfig, StartMesh, REFERENCE_LEVEL};
+use radcol_core::prelude::AssemblyBackend;
+use radcol_core::render::{Camera, RenderOptions, ToneMap};
+use radcol_core::run::{
+    Field, Problem, ReferenceOperator, SolveConfig, StartMesh, REFERENCE_LEVEL,
+};
+use radcol_core::study::{find_alpha0, Alpha0Report};
 
 /// The node parameter and how it was chosen.
 #[derive(Clone, Debug)]
@@ -257,7 +257,7 @@ impl Look {
     /// texture coordinates when it has them, else a generated layout.
     pub fn atlas(
         &self,
-        surface: &radcol_core::geometry::Surface,
+        surface: &radcol_core::run::Surface,
         resolution: radcol_core::render::lightmap::Resolution,
     ) -> Result<radcol_core::render::lightmap::Atlas, radcol_core::render::RenderError> {
         use radcol_core::render::RenderError;
@@ -366,7 +366,7 @@ pub fn check_distinct(
 mod tests {
     use super::*;
     use crate::args::{BackendArg, PrecisionArg};
-    use radcol_core::assembly::Scalar;
+    use radcol_core::prelude::Scalar;
 
     #[test]
     fn auto_alpha_is_alpha0_for_odd_degree() {
@@ -409,7 +409,7 @@ mod tests {
         };
         assert_eq!(adapt, Some(target));
         // The library's front door configures the same.
-        use radcol_core::radiosity::Settings;
+        use radcol_core::prelude::Settings;
         for (args, settings) in [
             (&["cornell"][..], Settings::default()),
             (

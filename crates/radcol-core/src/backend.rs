@@ -1,43 +1,15 @@
-//! What can assemble: the kinds of backend and the floating-point types they
-//! compute in. A floor-level module (the errors name them too); re-exported
-//! from [`crate::assembly`].
+//! What an assembly backend implements and uses, in one place: the
+//! [`AssemblyBackend`] trait that a device backend (radcol-gpu's) implements,
+//! the [`AssemblyPlan`] it executes (pairs classified, with their tables of
+//! rules and far pairs), the matrix it fills, what it reports, and the
+//! errors it returns. [`CpuBackend`] is the reference that every other
+//! backend is tested against, and the fallback when a device is missing.
 
-use serde::Serialize;
-
-/// Which kind of backend assembles.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum BackendKind {
-    /// [`crate::assembly::CpuBackend`]: rayon, f64.
-    Cpu,
-    /// The WGSL backend of `radcol-gpu`.
-    Gpu,
-}
-
-impl std::fmt::Display for BackendKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            BackendKind::Cpu => "cpu",
-            BackendKind::Gpu => "gpu",
-        })
-    }
-}
-
-/// The floating-point type an assembly computes in.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Scalar {
-    /// Double precision.
-    F64,
-    /// Single precision (GPUs without `SHADER_F64`, or when asked).
-    F32,
-}
-
-impl std::fmt::Display for Scalar {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Scalar::F64 => "f64",
-            Scalar::F32 => "f32",
-        })
-    }
-}
+pub use crate::assembly::{
+    Assembled, AssemblyBackend, AssemblyPlan, BackendInfo, ClassTable, CpuBackend, FarTable,
+    FillMode, PairClass,
+};
+pub use crate::backend_kind::{BackendKind, Scalar};
+pub use crate::error::{Error, InputError};
+pub use crate::matrix::DenseMatrix;
+pub use crate::quadrature::MAX_RULE_DEGREE;

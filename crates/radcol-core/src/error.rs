@@ -248,11 +248,11 @@ pub enum InputError {
     #[error("the {backend} backend computes in {supported} only; {asked} needs the GPU backend")]
     Precision {
         /// The backend.
-        backend: crate::backend::BackendKind,
+        backend: crate::backend_kind::BackendKind,
         /// What it computes in.
-        supported: crate::backend::Scalar,
+        supported: crate::backend_kind::Scalar,
         /// What was asked for.
-        asked: crate::backend::Scalar,
+        asked: crate::backend_kind::Scalar,
     },
 }
 
@@ -323,7 +323,7 @@ pub enum Error {
     #[error("assembly backend '{backend}': {source}")]
     Backend {
         /// Which backend.
-        backend: crate::backend::BackendKind,
+        backend: crate::backend_kind::BackendKind,
         /// The backend's own typed error.
         source: Box<dyn std::error::Error + Send + Sync>,
     },

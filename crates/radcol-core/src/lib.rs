@@ -66,6 +66,7 @@
 pub mod alpha0;
 pub mod assembly;
 pub mod backend;
+mod backend_kind;
 pub mod camera;
 pub mod discretization;
 pub mod error;

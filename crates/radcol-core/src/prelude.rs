@@ -18,7 +18,8 @@
 //! # Ok::<(), radcol_core::prelude::Error>(())
 //! ```
 
-pub use crate::assembly::{CpuBackend, QuadratureOptions};
+pub use crate::assembly::{AssemblyBackend, BackendInfo, CpuBackend, QuadratureOptions};
+pub use crate::backend_kind::{BackendKind, Scalar};
 pub use crate::camera::Camera;
 pub use crate::error::InputError;
 pub use crate::problem::{Field, Problem};
@@ -37,7 +38,7 @@ pub use crate::run::{
 #[cfg(feature = "gltf")]
 pub use crate::scene::load_gltf;
 pub use crate::scene::{
-    builtin, load_obj, Material, Scene, SceneBuilder, SceneError, TriangleOrigin,
+    builtin, load_obj, Material, Scene, SceneBuilder, SceneError, TriangleOrigin, BUILTIN_SCENES,
 };
 pub use crate::solution::Solution;
 /// The vector types of every position and normal (`DVec3`), re-exported so

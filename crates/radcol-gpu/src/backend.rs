@@ -6,11 +6,10 @@ use crate::error::GpuError;
 use crate::far_field::fill_far_field;
 use crate::tiling::TileLimits;
 use crate::Precision;
-use radcol_core::assembly::{
-    Assembled, AssemblyBackend, AssemblyPlan, BackendInfo, BackendKind, FillMode, PairClass, Scalar,
+use radcol_core::backend::{
+    Assembled, AssemblyBackend, AssemblyPlan, BackendInfo, BackendKind, DenseMatrix, Error,
+    FillMode, PairClass, Scalar,
 };
-use radcol_core::error::Error;
-use radcol_core::matrix::DenseMatrix;
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;

@@ -5,7 +5,7 @@ use crate::error::GpuError;
 use crate::far_field::FarFieldKernels;
 use crate::tiling::TileLimits;
 use crate::Precision;
-use radcol_core::assembly::Scalar;
+use radcol_core::backend::Scalar;
 use std::sync::Arc;
 
 /// Which adapters a context may use.

@@ -1,7 +1,7 @@
 //! Typed errors of the GPU backend. They convert into
-//! [`radcol_core::error::Error::Backend`] at the [`AssemblyBackend`] boundary.
+//! [`radcol_core::backend::Error::Backend`] at the [`AssemblyBackend`] boundary.
 //!
-//! [`AssemblyBackend`]: radcol_core::assembly::AssemblyBackend
+//! [`AssemblyBackend`]: radcol_core::backend::AssemblyBackend
 
 /// Everything that can go wrong on the GPU path.
 #[derive(Debug, thiserror::Error)]
@@ -90,10 +90,10 @@ impl GpuError {
     }
 }
 
-impl From<GpuError> for radcol_core::error::Error {
+impl From<GpuError> for radcol_core::backend::Error {
     fn from(e: GpuError) -> Self {
-        radcol_core::error::Error::Backend {
-            backend: radcol_core::assembly::BackendKind::Gpu,
+        radcol_core::backend::Error::Backend {
+            backend: radcol_core::backend::BackendKind::Gpu,
             source: Box::new(e),
         }
     }

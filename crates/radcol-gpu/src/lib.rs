@@ -1,6 +1,6 @@
 //! radcol-gpu: the GPU assembly backend of radcol.
 //!
-//! It executes the same [`AssemblyPlan`](radcol_core::assembly::AssemblyPlan)
+//! It executes the same [`AssemblyPlan`](radcol_core::backend::AssemblyPlan)
 //! as the CPU backend: the far pairs (almost all of them) run as a WGSL compute
 //! shader (`shaders/far_field.wgsl`) through wgpu, in f64 when the adapter
 //! offers `SHADER_F64` (lavapipe does) and in f32 otherwise or when asked; the
@@ -11,7 +11,7 @@
 //! * [`GpuContext`]: instance, adapter, device, queue and pipelines, built once.
 //! * [`far_field::fill_far_field`]: the work function, taking `&Device, &Queue`.
 //! * [`GpuBackend`]: implements core's
-//!   [`AssemblyBackend`](radcol_core::assembly::AssemblyBackend).
+//!   [`AssemblyBackend`](radcol_core::backend::AssemblyBackend).
 //! * [`select_backend`]: [`BackendChoice`] `Cpu` / `Gpu` / `Auto` and a [`Precision`].
 //!
 //! The CPU/GPU split, tiling and precision rules are described in this

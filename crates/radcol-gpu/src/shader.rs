@@ -1,7 +1,7 @@
 //! WGSL sources (from the crate's `shaders/`) and the one-line
 //! preamble that picks the precision.
 
-use radcol_core::assembly::Scalar;
+use radcol_core::backend::Scalar;
 
 /// A WGSL file of `shaders/`, compiled into the crate.
 #[derive(Clone, Copy, Debug)]

@@ -2,9 +2,9 @@
 //! turning them into core types (and rejecting bad values) is `config.rs`'s job.
 
 use clap::{Args, Parser, Subcommand};
-use radcol_core::assembly::QuadratureOptions;
-use radcol_core::run::{ADAPTIVE_DEGREE, DEFAULT_COMPRESSION_TOL, DEFAULT_DEGREE};
-use radcol_core::solve::GmresParams;
+use radcol_core::run::{
+    GmresParams, QuadratureOptions, ADAPTIVE_DEGREE, DEFAULT_COMPRESSION_TOL, DEFAULT_DEGREE,
+};
 
 mod solve;
 mod values;

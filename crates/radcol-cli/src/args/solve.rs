@@ -2,11 +2,9 @@
 
 use super::{ProblemArgs, TonemapArg, VerticesArg};
 use clap::Args;
-use radcol_core::query::DEFAULT_SNAP;
-use radcol_core::render::lightmap::DEFAULT_LIGHTMAP_SIZE;
-use radcol_core::render::RenderOptions;
-use radcol_core::run::adapt::AdaptOptions;
-use radcol_core::run::{DEFAULT_EDGE_FRACTION, DEFAULT_LEVEL};
+use radcol_core::prelude::DEFAULT_SNAP;
+use radcol_core::render::{lightmap::DEFAULT_LIGHTMAP_SIZE, RenderOptions};
+use radcol_core::run::{adapt::AdaptOptions, DEFAULT_EDGE_FRACTION, DEFAULT_LEVEL};
 use std::path::PathBuf;
 
 /// `radcol solve`.

@@ -1,8 +1,10 @@
 //! `radcol solve --target-error`: the adaptive loop's steps and why it stopped.
 
 use super::{sci, secs};
-use radcol_core::run::adapt::{AdaptOptions, AdaptOutcome, AdaptStep, SingularPoint, StopReason};
-use radcol_core::run::OperatorKind;
+use radcol_core::run::{
+    adapt::AdaptOptions, adapt::AdaptOutcome, adapt::AdaptStep, adapt::SingularPoint,
+    adapt::StopReason, OperatorKind,
+};
 use serde::Serialize;
 use std::fmt;
 

@@ -1,8 +1,7 @@
 //! One channel's estimate and limiter lines of the `radcol solve` report.
 
 use super::sci;
-use radcol_core::estimate::ErrorEstimate;
-use radcol_core::solution::Limited;
+use radcol_core::run::{ErrorEstimate, Limited};
 use std::fmt;
 
 /// The estimate's line(s) of one channel.

@@ -2,7 +2,7 @@
 //! its adaptive run), then the fastest setting for each decade of error.
 
 use super::{sci, AdaptReport, StudyReport};
-use radcol_core::study::speed::{DecadeBest, Setting};
+use radcol_core::study::{speed::DecadeBest, speed::Setting};
 use serde::Serialize;
 use std::fmt;
 
@@ -91,7 +91,7 @@ impl fmt::Display for Fastest {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use radcol_core::study::speed::{fastest_per_decade, Refinement};
+    use radcol_core::study::{speed::fastest_per_decade, speed::Refinement};
 
     /// The table names the fastest setting of each decade, and the one with
     /// the fewest unknowns only where it has fewer.

@@ -49,7 +49,7 @@ pub struct InfoReport {
     /// the job's mesh was built.
     pub compressed: Option<CompressedInfo>,
     /// Whether visibility tests are needed, and why.
-    pub visibility: radcol_core::visibility::VisibilityAnalysis,
+    pub visibility: radcol_core::run::VisibilityAnalysis,
     /// Triangles, materials and emitters of a scene with materials.
     pub contents: Option<SceneInfo>,
     /// Assembly time and work, measured on a sample (None without `--plan`,
@@ -136,10 +136,10 @@ pub struct ShapeRatio {
 /// What `--operator compressed` would store, before anything is computed.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct CompressedInfo {
-    /// The hierarchical matrix's bytes ([`radcol_core::hmatrix::HMatrix::predict`]).
-    pub prediction: radcol_core::hmatrix::HPrediction,
+    /// The hierarchical matrix's bytes ([`radcol_core::run::predict_compressed_from_geometry`]).
+    pub prediction: radcol_core::run::HPrediction,
     /// The plan's table of element pair classes, as expected
-    /// ([`radcol_core::assembly::pair_table_bytes`]).
+    /// ([`radcol_core::run::pair_table_bytes`]).
     pub pair_table_bytes: f64,
 }
 
@@ -159,8 +159,8 @@ impl InfoReport {
             .map(|b| gib(b as f64))
             .unwrap_or_else(|| "unknown".into());
         if i.stopped() {
-            let per = radcol_core::nodes::nodes_per_element(i.degree) as u64;
-            let n = radcol_core::mesh::MAX_EDGE_COUNT_CAP * per;
+            let per = radcol_core::run::nodes_per_element(i.degree) as u64;
+            let n = radcol_core::run::MAX_EDGE_COUNT_CAP * per;
             writeln!(w, "  unknowns        more than {n} at r = {}", i.degree)?;
             return writeln!(
                 w,
@@ -216,7 +216,7 @@ impl fmt::Display for InfoReport {
             i.degree
         )?;
         if i.stopped() {
-            let cap = radcol_core::mesh::MAX_EDGE_COUNT_CAP;
+            let cap = radcol_core::run::MAX_EDGE_COUNT_CAP;
             writeln!(
                 w,
                 "  elements        more than {cap} (counting stopped there)"

@@ -2,8 +2,8 @@
 
 use super::alpha_text;
 use crate::setup::Alpha;
-use radcol_core::alpha0::AlphaRoot;
-use radcol_core::nodes::NodeSet;
+use radcol_core::run::NodeSet;
+use radcol_core::study::AlphaRoot;
 use serde::Serialize;
 use std::fmt;
 

@@ -2,9 +2,10 @@
 //! (dense or compressed, why, and what compression kept), and the memory
 //! predicted and measured.
 
-use radcol_core::hmatrix::{HStats, SampledSize};
-use radcol_core::run::operator::SAMPLED_ROWS;
-use radcol_core::run::{MemoryUse, OperatorChoice, OperatorDecision, OperatorKind, SolveOutcome};
+use radcol_core::run::SAMPLED_ROWS;
+use radcol_core::run::{
+    HStats, MemoryUse, OperatorChoice, OperatorDecision, OperatorKind, SampledSize, SolveOutcome,
+};
 use serde::Serialize;
 use std::fmt;
 

@@ -5,12 +5,11 @@ use super::channel::{fmt_estimate, fmt_limited};
 use super::operator::{self, OperatorReport};
 use super::{alpha_text, precise, sci, secs, AdaptReport, ProblemText};
 use crate::setup::Setup;
-use radcol_core::assembly::{BackendInfo, VisibilityMode};
-use radcol_core::estimate::ErrorEstimate;
-use radcol_core::norms::ErrorNorms;
-use radcol_core::run::{SolveOutcome, SolverKind, SolverReport, Timings};
-use radcol_core::solution::Limited;
-use radcol_core::visibility::VisibilityAnalysis;
+use radcol_core::prelude::BackendInfo;
+use radcol_core::run::{
+    ErrorEstimate, ErrorNorms, Limited, SolveOutcome, SolverKind, SolverReport, Timings,
+    VisibilityAnalysis, VisibilityMode,
+};
 use serde::Serialize;
 use std::fmt;
 
@@ -364,11 +363,8 @@ pub struct GradeReport {
 }
 
 impl GradeReport {
-    fn new(
-        g: &radcol_core::mesh::grading::Grade,
-        surface: &radcol_core::geometry::Surface,
-    ) -> Self {
-        let grading = radcol_core::mesh::grading::Grading::towards_concave_lines(surface, g);
+    fn new(g: &radcol_core::run::Grade, surface: &radcol_core::run::Surface) -> Self {
+        let grading = radcol_core::run::Grading::towards_concave_lines(surface, g);
         Self {
             exponent: grading.exponent,
             zone: grading.zone,
@@ -384,7 +380,7 @@ impl GradeReport {
 }
 
 /// With a degree per element (`--hp`), how many elements have each degree.
-fn degrees_by_element(disc: &radcol_core::discretization::Discretization) -> Option<Vec<usize>> {
+fn degrees_by_element(disc: &radcol_core::run::Discretization) -> Option<Vec<usize>> {
     disc.uniform_nodes()
         .is_none()
         .then(|| disc.elements_per_degree())

@@ -3,7 +3,7 @@
 
 use super::{alpha_text, ProblemText};
 use crate::setup::Setup;
-use radcol_core::assembly::BackendInfo;
+use radcol_core::prelude::BackendInfo;
 use radcol_core::run::SolverKind;
 use radcol_core::study::{fitted_order_above_rounding, PredictedOrders, StudyRow};
 use serde::Serialize;

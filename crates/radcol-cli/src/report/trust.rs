@@ -41,7 +41,7 @@ pub fn solve_warnings(
     let r = s.cfg.degree;
     if r > 0 {
         let lebesgue = |a: f64| {
-            radcol_core::nodes::NodeSet::new(r, a).map_or(f64::INFINITY, |n| n.lebesgue_constant())
+            radcol_core::run::NodeSet::new(r, a).map_or(f64::INFINITY, |n| n.lebesgue_constant())
         };
         let here = lebesgue(s.cfg.alpha);
         let auto = s.alpha.a0.auto_alpha();

@@ -5,15 +5,14 @@
 
 use crate::error::{bad_input, with_flags};
 use crate::setup::Setup;
-use radcol_core::error::{Error as CoreError, InputError};
-use radcol_core::run::{mesh_size, usable, MemoryBudget};
+use radcol_core::run::{mesh_size, usable, Error as CoreError, InputError, MemoryBudget};
 
 /// The t in (0, 1] where an operator of `operator` bytes growing like N and
 /// a pair table of `pair_table` bytes on `elements` elements growing as
-/// [`radcol_core::assembly::pair_table_bytes`], both at t times the size,
+/// [`radcol_core::run::pair_table_bytes`], both at t times the size,
 /// fill `bytes` (by bisection: both grow with t).
 fn shrink_to_fit(operator: f64, pair_table: f64, elements: f64, bytes: f64) -> f64 {
-    let b = radcol_core::assembly::pair_table_bytes;
+    let b = radcol_core::run::pair_table_bytes;
     let table = |t: f64| pair_table * b(t * elements) / b(elements).max(f64::MIN_POSITIVE);
     let (mut lo, mut hi) = (0.0, 1.0);
     for _ in 0..200 {
@@ -51,8 +50,8 @@ pub fn sized(err: CoreError, s: &Setup) -> anyhow::Error {
         }) => (matrix / 8.0).sqrt() * (usable(*available) / to_come).sqrt(),
         // The compressed operator's a priori limit: its table of pair classes.
         CoreError::Input(InputError::PairTableTooLarge { available, .. }) => {
-            let per_element = radcol_core::nodes::nodes_per_element(s.cfg.degree) as f64;
-            radcol_core::assembly::pair_table_elements(usable(*available)) * per_element
+            let per_element = radcol_core::run::nodes_per_element(s.cfg.degree) as f64;
+            radcol_core::run::pair_table_elements(usable(*available)) * per_element
         }
         // The operator grows like N (its dense blocks near the diagonal),
         // the pair table as pair_table_bytes: the t = N'/N where the two
@@ -64,7 +63,7 @@ pub fn sized(err: CoreError, s: &Setup) -> anyhow::Error {
             available,
             ..
         }) => {
-            let per_element = radcol_core::nodes::nodes_per_element(s.cfg.degree) as f64;
+            let per_element = radcol_core::run::nodes_per_element(s.cfg.degree) as f64;
             let elements = *unknowns as f64 / per_element;
             let t = shrink_to_fit(*operator, *pair_table, elements, usable(*available));
             *unknowns as f64 * t

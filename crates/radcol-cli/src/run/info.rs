@@ -10,15 +10,10 @@ use crate::scene::Loaded;
 use crate::setup::{default_refinement, load};
 use crate::validate::InfoJob;
 use anyhow::Result;
-use radcol_core::alpha0::auto_alpha;
-use radcol_core::assembly::QuadratureOptions;
-use radcol_core::discretization::Discretization;
-use radcol_core::geometry::Surface;
-use radcol_core::hmatrix::HOptions;
-use radcol_core::mesh::Mesh;
-use radcol_core::nodes::NodeSet;
-use radcol_core::run::{AssemblyCost, MemoryEstimate};
-use radcol_core::visibility::{self, VisibilityAnalysis};
+use radcol_core::run::{
+    analyze_visibility, auto_alpha, AssemblyCost, Discretization, HOptions, MemoryEstimate, Mesh,
+    NodeSet, QuadratureOptions, Surface, VisibilityAnalysis,
+};
 use std::io::Write;
 use std::sync::Arc;
 
@@ -88,7 +83,7 @@ fn info_report(job: &Refinement, loaded: &Loaded) -> InfoReport {
         })
         .collect();
     let (lo, hi) = mesh.shape_ratio_range();
-    let vis = visibility::analyze(&job.surface);
+    let vis = analyze_visibility(&job.surface);
     let bbox = job.surface.bounding_box();
     // Planned on the mesh just built, which is the job's when it is small enough.
     let estimate = job
@@ -102,7 +97,7 @@ fn info_report(job: &Refinement, loaded: &Loaded) -> InfoReport {
         degree: job.degree,
         elements,
         counted_up_to: (elements == u64::MAX && job.max_edge.is_some())
-            .then_some(radcol_core::mesh::MAX_EDGE_COUNT_CAP),
+            .then_some(radcol_core::run::MAX_EDGE_COUNT_CAP),
         patches: job.surface.patches.len(),
         base_triangles: job.surface.base_triangle_count(),
         h: mesh.h() / shrink,
@@ -174,8 +169,12 @@ fn predict_compressed(degree: usize, mesh: &Arc<Mesh>) -> Option<CompressedInfo>
     let disc = Discretization::new(Arc::clone(mesh), nodes);
     let limit = radcol_core::run::available_memory().map_or(f64::INFINITY, |a| 4.0 * a as f64);
     Some(CompressedInfo {
-        prediction: radcol_core::hmatrix::radiosity::predict(&disc, &HOptions::default(), limit),
-        pair_table_bytes: radcol_core::assembly::pair_table_bytes(mesh.len() as f64),
+        prediction: radcol_core::run::predict_compressed_from_geometry(
+            &disc,
+            &HOptions::default(),
+            limit,
+        ),
+        pair_table_bytes: radcol_core::run::pair_table_bytes(mesh.len() as f64),
     })
 }
 

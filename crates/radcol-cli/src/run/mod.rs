@@ -19,11 +19,11 @@ use crate::setup::{self, check_writable, resolve_alpha};
 use crate::validate::{Config, NodesJob, OutputFile, SolveJob, StudyJob};
 use crate::{output, plot, progress};
 use anyhow::{Context, Result};
-use radcol_core::nodes::NodeSet;
-use radcol_core::run::adapt::{solve_adaptive, AdaptOptions};
-use radcol_core::run::solve;
-use radcol_core::study::speed::{adaptive_settings, fastest_per_decade, uniform_settings};
-use radcol_core::study::{predicted_orders, Study};
+use radcol_core::run::{adapt::solve_adaptive, adapt::AdaptOptions, solve, NodeSet};
+use radcol_core::study::{
+    predicted_orders, speed::adaptive_settings, speed::fastest_per_decade, speed::uniform_settings,
+    Study,
+};
 use std::io::{self, Write};
 
 /// Runs one command, printing its report to stdout.

@@ -1,5 +1,5 @@
 //! `--at`: u_n, the iterated û_n and the element estimate at the user's
-//! points, after the solve ([`radcol_core::query`]). Every point is found on
+//! points, after the solve ([`radcol_core::prelude::query`]). Every point is found on
 //! the surface before anything is solved, so a point off the scene costs
 //! nothing.
 
@@ -9,9 +9,8 @@ use crate::report::{PointChannel, PointLine, PointsReport};
 use crate::setup::Setup;
 use crate::validate::PointsSpec;
 use anyhow::{Context, Result};
-use radcol_core::mesh::{Locator, Mesh};
-use radcol_core::query::{query, QueryError, DEFAULT_SNAP};
-use radcol_core::run::SolveOutcome;
+use radcol_core::prelude::{query, QueryError, DEFAULT_SNAP};
+use radcol_core::run::{Locator, Mesh, SolveOutcome};
 use std::io::Write;
 use std::sync::Arc;
 use std::time::Instant;

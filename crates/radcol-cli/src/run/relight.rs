@@ -10,8 +10,7 @@
 use crate::error::bad_input;
 use crate::setup::Setup;
 use anyhow::Result;
-use radcol_core::problem::{Field, Problem};
-use radcol_core::run::{Relighter, SolveOutcome, SolverReport};
+use radcol_core::run::{Field, Problem, Relighter, SolveOutcome, SolverReport};
 use radcol_core::scene::{MaterialChange, Scene, SceneError};
 use serde::Serialize;
 use std::fmt;

@@ -5,7 +5,7 @@
 use crate::args::{KeArg, ProblemArgs};
 use crate::error::{bad_input, BadInput};
 use crate::scene::SceneSpec;
-use radcol_core::mesh::grading::{Grade, GRADE_RANGE};
+use radcol_core::run::{Grade, GRADE_RANGE};
 
 /// A scene with materials takes ρ and E from them (refusing --rho,
 /// --emission, --exact); `--ke radiance` needs materials.

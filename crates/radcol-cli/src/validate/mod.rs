@@ -10,7 +10,11 @@ mod points;
 pub use numbers::{parse_alpha, parse_levels};
 pub use outputs::{LookSpec, Output, OutputFile, OutputKind};
 pub use points::PointsSpec;
-use radcol_core::run::{ADAPTIVE_DEGREE, DEFAULT_DEGREE};
+use radcol_core::run::{
+    adapt::AdaptOptions, adapt::MIN_TARGET, check_degree, Field, GmresParams, Grade, HOptions,
+    OperatorChoice, QuadratureOptions, SolveConfig, SolverKind, VisibilityMode, ADAPTIVE_DEGREE,
+    DEFAULT_DEGREE, MIN_QUAD_TOL,
+};
 
 use crate::args::{
     BackendArg, Cli, Command, InfoArgs, NodesArgs, OperatorArg, PrecisionArg, ProblemArgs,
@@ -21,14 +25,6 @@ use crate::scene::SceneSpec;
 use anyhow::{Context, Result};
 use numbers::{degree, open_unit, parse_range};
 use outputs::{error_map, look, output, svg_file};
-use radcol_core::assembly::{QuadratureOptions, VisibilityMode, MIN_QUAD_TOL};
-use radcol_core::hmatrix::HOptions;
-use radcol_core::mesh::grading::Grade;
-use radcol_core::nodes::check_degree;
-use radcol_core::problem::Field;
-use radcol_core::run::adapt::{AdaptOptions, MIN_TARGET};
-use radcol_core::run::{OperatorChoice, SolveConfig, SolverKind};
-use radcol_core::solve::GmresParams;
 use std::ops::RangeInclusive;
 
 /// A validated command. There is one per run, so its variants' sizes do

@@ -3,7 +3,7 @@
 
 use super::AlphaSpec;
 use crate::error::{bad_input, BadInput};
-use radcol_core::nodes::{check_alpha, check_degree};
+use radcol_core::run::{check_alpha, check_degree};
 use std::ops::RangeInclusive;
 
 /// `--degree R` in 0..=6 (the range is core's).

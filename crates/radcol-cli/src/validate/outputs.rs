@@ -3,9 +3,7 @@
 
 use crate::args::{SolveArgs, TonemapArg, VerticesArg};
 use crate::error::{bad_input, BadInput};
-use radcol_core::camera::Camera;
-use radcol_core::render::lightmap::Resolution;
-use radcol_core::render::{RenderOptions, ToneMap, ToneOperator};
+use radcol_core::render::{lightmap::Resolution, Camera, RenderOptions, ToneMap, ToneOperator};
 use std::path::{Path, PathBuf};
 
 /// The kinds of file `--out` writes, by extension.

@@ -12,7 +12,7 @@
 use super::outputs::{only, OutputFile};
 use crate::error::{bad_input, BadInput};
 use glam::DVec3;
-use radcol_core::query::QueryPoint;
+use radcol_core::prelude::QueryPoint;
 use std::path::{Path, PathBuf};
 
 /// The points of `--at`, with their labels and where to write the values.

@@ -24,7 +24,7 @@ pub use plan::{
     AssemblyPlan, ClassTable, FarTable, FillMode, PairClass, PlanStats, Runs, Unchanged,
 };
 
-pub use crate::backend::{BackendKind, Scalar};
+pub use crate::backend_kind::{BackendKind, Scalar};
 
 use crate::error::Error;
 use crate::matrix::DenseMatrix;

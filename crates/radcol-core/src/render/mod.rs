@@ -19,6 +19,8 @@ mod vertex;
 mod input_mesh;
 pub mod lightmap;
 
+pub use crate::camera::Camera;
+
 pub use input_mesh::{input_vertex_mesh, Corners};
 
 pub use bvh::{ElementBvh, Hit};
@@ -28,7 +30,6 @@ pub use tonemap::{
 };
 pub use vertex::{vertex_mesh, VertexMesh};
 
-use crate::camera::Camera;
 use crate::mesh::Mesh;
 use crate::solution::Solution;
 use glam::DVec3;

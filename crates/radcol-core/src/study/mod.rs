@@ -5,7 +5,10 @@
 
 pub mod speed;
 
-use crate::alpha0::Alpha0Report;
+// The method's node sets and their α0, which the studies measure.
+pub use crate::alpha0::{find_alpha0, Alpha0Report, AlphaRoot};
+pub use crate::nodes::NodeSet;
+
 use crate::assembly::AssemblyBackend;
 use crate::error::{Error, InputError};
 use crate::norms::ErrorNorms;

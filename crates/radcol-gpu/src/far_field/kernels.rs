@@ -5,7 +5,7 @@ use crate::layout::{Params, MAX_NODES_PER_ELEMENT};
 use crate::scope::ErrorScopes;
 use crate::shader::{self, FAR_FIELD};
 use crate::Precision;
-use radcol_core::assembly::Scalar;
+use radcol_core::backend::Scalar;
 use std::borrow::Cow;
 use std::collections::HashMap;
 use std::mem::size_of;

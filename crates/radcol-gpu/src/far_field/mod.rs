@@ -35,7 +35,7 @@ use crate::error::GpuError;
 use crate::layout::MAX_NODES_PER_ELEMENT;
 use crate::scope::ErrorScopes;
 use crate::tiling::TileLimits;
-use radcol_core::assembly::{AssemblyPlan, Scalar};
+use radcol_core::backend::{AssemblyPlan, Scalar};
 
 /// What [`fill_far_field`] did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

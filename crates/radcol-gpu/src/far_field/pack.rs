@@ -5,8 +5,7 @@
 use crate::error::GpuError;
 use crate::layout::{GpuScalar, Params, RuleInfo, RULE_SLOTS};
 use crate::tiling::Tile;
-use radcol_core::assembly::{AssemblyPlan, ClassTable, FarTable};
-use radcol_core::quadrature::MAX_RULE_DEGREE;
+use radcol_core::backend::{AssemblyPlan, ClassTable, FarTable, MAX_RULE_DEGREE};
 use rayon::prelude::*;
 
 /// The used far rules, laid out for the device.

@@ -10,7 +10,7 @@ use super::FarFieldReport;
 use crate::error::GpuError;
 use crate::layout::{GpuScalar, Params};
 use crate::tiling::{TileLimits, TilePlan, WORKGROUP_X};
-use radcol_core::assembly::AssemblyPlan;
+use radcol_core::backend::AssemblyPlan;
 use std::mem::size_of;
 use wgpu::util::DeviceExt;
 

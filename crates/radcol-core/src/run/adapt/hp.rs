@@ -118,7 +118,7 @@ pub fn choose(
 /// Refuses hp (`hp` true) with a backend other than the CPU's.
 pub fn check_backend(hp: bool, backend: &dyn AssemblyBackend) -> Result<(), Error> {
     let kind = backend.info().kind;
-    if hp && kind != crate::backend::BackendKind::Cpu {
+    if hp && kind != crate::backend_kind::BackendKind::Cpu {
         let backend = kind.to_string();
         return Err(crate::error::InputError::HpBackend { backend }.into());
     }
@@ -154,7 +154,7 @@ impl Degrees {
     ) -> Result<Option<Self>, Error> {
         let mut d = Self::new(cfg, mesh.len())?;
         d.hp = opts.hp;
-        if opts.graded_start && backend.info().kind == crate::backend::BackendKind::Cpu {
+        if opts.graded_start && backend.info().kind == crate::backend_kind::BackendKind::Cpu {
             let diagonal = super::diagonal(mesh);
             for (k, r) in d.degree.iter_mut().enumerate() {
                 let h = super::longest_edge(mesh, k);
