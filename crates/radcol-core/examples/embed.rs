@@ -5,7 +5,7 @@
 //! Run with `cargo run --release -p radcol-core --example embed`.
 
 use glam::Vec3;
-use radcol_core::assembly::CpuBackend;
+use radcol_core::backend::CpuBackend;
 use radcol_core::render::{render, tone_map, vertex_mesh, RenderOptions, ToneMap};
 use radcol_core::run::{solve, SolveConfig, SolverKind};
 use radcol_core::scene::{Material, SceneBuilder};

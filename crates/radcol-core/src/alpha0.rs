@@ -246,7 +246,7 @@ impl Alpha0Report {
 }
 
 /// [`Alpha0Report::auto_alpha`] of degree `r`: the search runs once per
-/// degree and process (degrees up to [`crate::nodes::MAX_DEGREE`]; callers
+/// degree and process (degrees up to `crate::nodes::MAX_DEGREE`; callers
 /// that also need the report should call [`find_alpha0`] once and keep it).
 pub fn auto_alpha(r: usize) -> f64 {
     use std::sync::OnceLock;

@@ -185,7 +185,7 @@ pub enum InputError {
         available: u64,
     },
     /// The compressed operator, predicted from the geometry before anything
-    /// is computed ([`crate::hmatrix::HMatrix::predict`]), would not fit in
+    /// is computed (`crate::hmatrix::HMatrix::predict`), would not fit in
     /// memory with the plan's table of element pairs.
     #[error("{unknowns} unknowns need a compressed operator of {} {} ({} of it dense blocks near the diagonal, counted from the geometry), and {} for the table of their element pairs' classes, but only {} of memory is available; use a coarser mesh or a lower degree", if *complete { "about" } else { "more than" }, gib(*operator), gib(*near), gib(*pair_table), gib(*available as f64))]
     CompressedWontFit {

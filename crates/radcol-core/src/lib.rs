@@ -6,30 +6,39 @@
 //! u(P) - ρ(P)/π ∫_S u(Q) G(P,Q) dS_Q = E(P),   G = [(Q-P)·n_P][(P-Q)·n_Q] / |P-Q|⁴
 //! ```
 //!
-//! on triangulated surfaces, after Micula (2006): surfaces as smooth maps of
-//! planar polygons ([`geometry`]), uniformly refined meshes ([`mesh`]), interior
-//! nodes q_ij(α) with their Lagrange basis and the superconvergent α0
-//! ([`nodes`], [`alpha0`]), distance-adaptive quadrature ([`quadrature`],
-//! [`assembly`]), dense solvers ([`solve`]), solutions and error norms
-//! ([`solution`], [`norms`]) and refinement studies ([`study`]).
+//! on triangulated surfaces, after Micula (2006): piecewise polynomials of
+//! degree r on the elements, collocated at interior nodes q_ij(α) (with the
+//! superconvergent α0 where it exists), a distance-adaptive quadrature,
+//! exact visibility in scenes that occlude, a dense or compressed operator,
+//! GMRES or LU, an a posteriori error estimate and adaptive refinement.
 //!
-//! For graphics: triangle scenes with materials from OBJ files, vertex buffers
-//! or the built-ins ([`scene`]), occlusion where the geometry needs it
-//! ([`visibility`]: exact clipping of partly hidden elements), and images and
-//! per-vertex colours of the solution ([`render`], [`camera`]), and the
-//! solution at any point ([`query`]).
+//! The library's edge:
 //!
-//! An embedding program needs one import, [`prelude`], with one error type
-//! ([`prelude::Error`]) that every fallible call converts into; the
-//! `bake` example (`cargo run --release -p radcol-core --example bake`)
+//! * [`prelude`]: the front door. [`prelude::Radiosity`] owns a solved
+//!   scene (query points, relight, refine, colours for the input mesh,
+//!   images, files); one error type, [`prelude::Error`], that every fallible
+//!   call converts into.
+//! * [`run`]: one solve below the front door: its configuration, its
+//!   outcome and the types they are made of; the adaptive loop.
+//! * [`query`]: the solution at any point of the surface: u_n, û_n and
+//!   their estimated errors.
+//! * [`study`]: convergence studies over levels, fitted orders, node sets.
+//! * [`scene`]: scenes from OBJ and glTF files, the built-ins, one's own
+//!   buffers.
+//! * [`render`] and [`export`]: images, vertex meshes and lightmaps, and
+//!   their writers.
+//! * [`backend`]: what an assembly backend on another device implements.
+//!
+//! The stages behind them (geometry, meshes, nodes, quadrature, visibility,
+//! assembly, the compressed operator, solvers, the estimate) are private;
+//! the `bake` example (`cargo run --release -p radcol-core --example bake`)
 //! solves a scene file adaptively, reads its light back at points and
-//! writes an image through it.
+//! writes an image through the prelude alone.
 //!
 //! ```
-//! use radcol_core::assembly::CpuBackend;
-//! use radcol_core::geometry::shapes::sphere;
-//! use radcol_core::problem::{Field, Problem};
-//! use radcol_core::run::{solve, SolveConfig};
+//! use radcol_core::backend::CpuBackend;
+//! use radcol_core::run::shapes::sphere;
+//! use radcol_core::run::{solve, Field, Problem, SolveConfig};
 //! use std::sync::Arc;
 //!
 //! // On the unit sphere G ≡ 1/4 and ∫_S G dS = π, so with ρ = 0.5 and E = 1 the
@@ -40,7 +49,7 @@
 //! for u in outcome.channels[0].solution.nodal() {
 //!     assert!((u - 2.0).abs() < 1e-10);
 //! }
-//! # Ok::<(), radcol_core::error::Error>(())
+//! # Ok::<(), radcol_core::run::Error>(())
 //! ```
 //!
 //! A scene with occlusion, solved in three colour channels and rendered:
@@ -63,43 +72,64 @@
 //! ```
 #![deny(missing_docs)]
 
-pub mod alpha0;
-pub mod assembly;
+/// Declares modules behind the library's edge: crate-private, unless the
+/// `internals` feature makes them public (and hidden from the docs) for
+/// this workspace's tests, benches and the GPU backend's tests. They carry
+/// no promise of stability; what a program needs of them is re-exported by
+/// the public modules.
+macro_rules! internal {
+    ($($(#[$attr:meta])* $name:ident;)*) => {$(
+        $(#[$attr])*
+        #[cfg(feature = "internals")]
+        #[doc(hidden)]
+        pub mod $name;
+        $(#[$attr])*
+        #[cfg(not(feature = "internals"))]
+        pub(crate) mod $name;
+    )*};
+}
+
 pub mod backend;
-mod backend_kind;
-pub mod camera;
-pub mod discretization;
-pub mod error;
-pub mod estimate;
 #[cfg(feature = "export")]
 pub mod export;
-pub mod expr;
-pub mod geometry;
-pub mod hmatrix;
-pub mod kernel;
-pub mod matrix;
-pub mod mesh;
-pub mod nodes;
-pub mod norms;
 #[cfg(all(feature = "scenes", feature = "render"))]
 pub mod prelude;
-pub mod problem;
-pub mod progress;
-pub mod quadrature;
 pub mod query;
-#[cfg(all(feature = "scenes", feature = "render"))]
-pub mod radiosity;
 #[cfg(feature = "render")]
 pub mod render;
 pub mod run;
 #[cfg(feature = "scenes")]
 pub mod scene;
-pub mod solution;
-pub mod solve;
 pub mod study;
+
+mod backend_kind;
+internal! {
+    alpha0;
+    assembly;
+    #[cfg(any(feature = "scenes", feature = "render"))]
+    camera;
+    discretization;
+    error;
+    estimate;
+    expr;
+    geometry;
+    hmatrix;
+    kernel;
+    matrix;
+    mesh;
+    nodes;
+    norms;
+    problem;
+    progress;
+    quadrature;
+    #[cfg(all(feature = "scenes", feature = "render"))]
+    radiosity;
+    solution;
+    solve;
+    visibility;
+}
 #[cfg(any(test, feature = "conformance"))]
 pub mod testing;
-pub mod visibility;
 
 /// The README's library example, compiled and run as a doctest.
 #[cfg(all(doctest, feature = "scenes", feature = "export"))]

@@ -31,7 +31,7 @@ pub const fn nodes_per_element(r: usize) -> usize {
     (r + 1) * (r + 2) / 2
 }
 
-/// `r` when radcol supports it (0..=[`MAX_DEGREE`]).
+/// `r` when radcol supports it (0..=`MAX_DEGREE`).
 pub fn check_degree(r: usize) -> Result<usize, InputError> {
     if r > MAX_DEGREE {
         return Err(InputError::Degree { degree: r });
@@ -44,7 +44,7 @@ pub fn check_degree(r: usize) -> Result<usize, InputError> {
 /// of 1e5 and already has a Lebesgue constant far beyond any useful one.
 pub const MIN_ALPHA: f64 = 1e-9;
 
-/// `alpha` when it lies in [[`MIN_ALPHA`], 1/3) (every node interior, and
+/// `alpha` when it lies in [`MIN_ALPHA`, 1/3) (every node interior, and
 /// not within rounding of an element's corners).
 pub fn check_alpha(alpha: f64) -> Result<f64, InputError> {
     if !(MIN_ALPHA..1.0 / 3.0).contains(&alpha) {

@@ -82,7 +82,7 @@ impl Field {
         }
     }
 
-    /// Value at a point known by position, building the full [`Site`] only for
+    /// Value at a point known by position, building the full `Site` only for
     /// fields that need more than the position.
     #[inline]
     pub fn eval_with(&self, position: DVec3, site: impl FnOnce() -> Site) -> f64 {
@@ -200,7 +200,7 @@ impl Problem {
 /// For far elements the rule points, normals, weights × Jacobians and values of
 /// u are tabulated once per element and degree, so applying the operator at a
 /// point costs one kernel evaluation per rule point; near and self pieces go
-/// through the adaptive [`ElementIntegrator`].
+/// through the adaptive `ElementIntegrator`.
 #[derive(Debug)]
 pub struct ReferenceOperator {
     mesh: Mesh,

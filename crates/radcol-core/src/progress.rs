@@ -11,7 +11,7 @@ use std::sync::Arc;
 /// threads; must be cheap.
 pub trait Progress: Send + Sync {
     /// A stage starts ("plan", "assembly", "estimate": row blocks; "solve":
-    /// decades of the relative residual, [`solve_decades`] per channel);
+    /// decades of the relative residual, `solve_decades` per channel);
     /// `total` units of work follow.
     fn start(&self, stage: &str, total: u64);
     /// `n` more units of the current stage are done.

@@ -135,6 +135,7 @@ pub fn compare_matrices(
 
 /// Runs every conformance case on `backend` and compares with the CPU backend
 /// (matrices with [`compare_matrices`], and kernel evaluation counts).
+#[cfg(feature = "conformance")]
 pub fn check_backend(
     backend: &dyn AssemblyBackend,
     tol: f64,

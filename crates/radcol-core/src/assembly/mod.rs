@@ -17,11 +17,11 @@ pub mod plan;
 
 pub use cpu::CpuBackend;
 pub use integrate::{
-    ElementIntegrator, FieldPoint, QuadratureOptions, Shortfall, VisibilityMode, MIN_QUAD_TOL,
+    ElementIntegrator, FieldPoint, QuadratureOptions, VisibilityMode, MIN_QUAD_TOL,
 };
 pub use plan::{pair_table_bytes, pair_table_elements};
 pub use plan::{
-    AssemblyPlan, ClassTable, FarTable, FillMode, PairClass, PlanStats, Runs, Unchanged,
+    AssemblyPlan, ClassTable, FarTable, FillMode, PairClass, PlanStats, Unchanged,
 };
 
 pub use crate::backend_kind::{BackendKind, Scalar};

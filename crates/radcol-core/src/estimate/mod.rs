@@ -39,7 +39,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 mod update;
-pub use update::{estimate_updated, UPDATE_SHARE};
+pub use update::estimate_updated;
 
 /// The element-integral tolerance of the check rows (the solve's own when
 /// looser): η is wanted to a few digits, and an integral error of 1e-9
@@ -129,7 +129,7 @@ pub struct ErrorEstimate {
     /// Nodes where u_n < 0.
     pub negative_nodes: usize,
     /// Lattice points (vertices, edges, interiors of every element; see
-    /// [`crate::norms::LATTICE`]) where u_n < 0.
+    /// `crate::norms::LATTICE`) where u_n < 0.
     pub negative_points: usize,
     /// min u_n over the nodes, check points and lattice points.
     pub min_value: f64,
@@ -145,7 +145,7 @@ pub struct ErrorEstimate {
     #[serde(skip)]
     pub negative: Vec<bool>,
     /// When the estimate was updated from the previous adaptive step's
-    /// ([`estimate_updated`]) instead of computed afresh: at most how far
+    /// (`estimate_updated`) instead of computed afresh: at most how far
     /// (absolute) η, each element's figure and `max` can be from the
     /// computed ones.
     pub updated_within: Option<f64>,

@@ -26,7 +26,7 @@
 //! default allowance, and elements that would have stayed below it were
 //! split (the Cornell box to 3e-4: 21 steps against 18, to 28 689 unknowns
 //! against 27 132). Where the drift would pass what the caller allows, or
-//! where the update would fill more than [`UPDATE_SHARE`] of the pairs a
+//! where the update would fill more than `UPDATE_SHARE` of the pairs a
 //! fresh estimate fills, the caller computes afresh.
 
 use super::{by_channel, contract, summaries, ChannelFields, ErrorEstimate};
@@ -48,7 +48,7 @@ pub const UPDATE_SHARE: f64 = 0.8;
 /// channel, u_n - g at the nodes: g the previous solution on this mesh).
 /// `within` is how far (relative to max |u_n| of each channel) the figures
 /// may be from the computed ones. None where that cannot be kept, or where
-/// the update would fill more than [`UPDATE_SHARE`] of the pairs.
+/// the update would fill more than `UPDATE_SHARE` of the pairs.
 pub fn estimate_updated(
     check: &AssemblyPlan,
     channels: &[ChannelFields<'_>],

@@ -99,6 +99,7 @@ impl LowRank {
     }
 
     /// Entry (i, j) of U Vᵀ.
+    #[cfg(any(test, feature = "internals"))]
     pub fn entry(&self, i: usize, j: usize) -> f64 {
         (0..self.rank())
             .map(|l| self.u[l * self.m + i] * self.v[l * self.n + j])

@@ -79,6 +79,7 @@ impl Cluster {
     }
 
     /// True when it holds no index.
+    #[cfg(feature = "internals")]
     pub fn is_empty(&self) -> bool {
         self.end == self.start
     }
@@ -140,6 +141,7 @@ impl ClusterTree {
     }
 
     /// The root cluster.
+    #[cfg(any(test, feature = "internals"))]
     pub fn root(&self) -> &Cluster {
         &self.clusters[0]
     }

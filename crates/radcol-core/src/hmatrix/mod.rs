@@ -33,8 +33,7 @@ use serde::Serialize;
 use std::ops::ControlFlow;
 
 pub use predict::HPrediction;
-pub use reuse::{Changed, Reuse};
-pub use sample::{SampledSize, MIN_PER_CLASS, SAMPLE_STRIDE};
+pub use sample::SampledSize;
 
 /// What is known of a matrix's blocks without computing an entry: which
 /// are zero, and which are smooth enough to compress. The block tree is
@@ -124,11 +123,11 @@ pub struct HStats {
     /// Where the stored numbers are: low-rank blocks, admissible blocks
     /// left dense (their cross did not pay), dense leaves of blocks that
     /// are admissible by distance but were subdivided because the
-    /// structure found them not smooth ([`Structure::smooth`]: for
+    /// structure found them not smooth (`Structure::smooth`: for
     /// radiosity, shadow boundaries and tangent planes), and dense leaves of
     /// the near field. They add up to `stored`.
     pub stored_by_kind: StoredByKind,
-    /// Leaves taken from a previous matrix ([`reuse`]) instead of computed.
+    /// Leaves taken from a previous matrix (`reuse`) instead of computed.
     pub reused_blocks: usize,
 }
 

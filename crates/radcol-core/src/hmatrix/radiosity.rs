@@ -54,6 +54,7 @@ impl<'a> PlanEntries<'a> {
     }
 
     /// The hierarchical matrix of the plan.
+    #[cfg(feature = "internals")]
     pub fn build(&self, opts: &HOptions) -> HMatrix {
         let (rows, cols) = self.boxes();
         HMatrix::build(&rows, &cols, self, opts)
@@ -452,7 +453,7 @@ impl Structure for Geometry<'_> {
 }
 
 /// What the compressed geometric matrix of `disc` will store
-/// ([`HMatrix::predict`]), from the geometry alone (no assembly plan),
+/// (`HMatrix::predict`), from the geometry alone (no assembly plan),
 /// stopping once past `limit` bytes. Exact for the dense leaves of a
 /// surface without occlusion; occlusion stores less near the diagonal.
 pub fn predict(disc: &Discretization, opts: &HOptions, limit: f64) -> HPrediction {

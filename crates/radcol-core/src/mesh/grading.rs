@@ -61,7 +61,7 @@ pub struct Grading {
 
 impl Grading {
     /// The grading `grade` asks for towards the concave edges and contact
-    /// lines of `surface` ([`concave_lines`]).
+    /// lines of `surface` (`concave_lines`).
     pub fn towards_concave_lines(surface: &Surface, grade: &Grade) -> Self {
         let (lo, hi) = surface.bounding_box();
         Self {

@@ -269,7 +269,7 @@ impl Mesh {
         }
     }
 
-    /// The [`Site`] at (s, t) of element `k` (for evaluating fields).
+    /// The `Site` at (s, t) of element `k` (for evaluating fields).
     pub fn site(&self, k: usize, s: f64, t: f64) -> Site {
         let p = self.point(k, s, t);
         Site {

@@ -10,7 +10,7 @@ pub mod collapsed;
 pub mod gauss;
 pub mod symmetric;
 
-/// The highest degree of precision in the [`RuleLadder`].
+/// The highest degree of precision in the `RuleLadder`.
 pub const MAX_RULE_DEGREE: usize = 30;
 
 /// A quadrature rule on the unit simplex σ: `∫_σ f ≈ Σ_q weights[q] · f(points[q])`.

@@ -12,7 +12,7 @@
 //! P: not at all when G ≡ 0 (P behind Δ_k's plane or Δ_k behind P's, or P on
 //! a flat Δ_k), over the exactly clipped visible part when an occluder may
 //! hide part of it or it straddles P's tangent plane, and otherwise with the
-//! distance-adaptive rules ([`ElementIntegrator::integrate`], the self split
+//! distance-adaptive rules (`ElementIntegrator::integrate`, the self split
 //! on a curved Δ_k under P). The row costs about one row of the assembly;
 //! the channels share it.
 //!

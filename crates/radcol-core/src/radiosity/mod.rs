@@ -56,7 +56,7 @@ use std::sync::OnceLock;
 #[derive(Clone, Debug, Default)]
 pub struct Settings {
     /// The largest error to reach, relative to max |u| (the a posteriori
-    /// estimate, [`crate::estimate`]): refine adaptively until it holds.
+    /// estimate, `crate::estimate`): refine adaptively until it holds.
     /// None: one solve on the default mesh.
     pub target_error: Option<f64>,
     /// Polynomial degree of every element (0..=6). None: degree 1 without

@@ -46,10 +46,10 @@ pub struct SolveConfig {
     /// is at most this long (scene units); None: uniform refinement only.
     pub max_edge: Option<f64>,
     /// Then grade the mesh towards concave edges and contact lines
-    /// ([`crate::mesh::grading`]; exponent 2 suits r = 1); None: no grading.
+    /// (`crate::mesh::grading`; exponent 2 suits r = 1); None: no grading.
     pub grade: Option<Grade>,
     /// Estimate the error of every channel after the solve
-    /// ([`crate::estimate`]): about as much work again as the assembly.
+    /// (`crate::estimate`): about as much work again as the assembly.
     pub estimate: bool,
     /// Where u_n < 0 although E, ρ ≥ 0, also give the nonnegative ũ_n of
     /// [`crate::solution::Solution::limited_nonnegative`] for display

@@ -43,6 +43,7 @@ pub use crate::mesh::{Locator, Mesh, MAX_EDGE_COUNT_CAP};
 pub use crate::nodes::{check_alpha, check_degree, nodes_per_element, NodeSet};
 pub use crate::norms::ErrorNorms;
 pub use crate::problem::{Field, Problem, ReferenceOperator};
+pub use crate::progress::{Cancel, Progress, ProgressHandle};
 pub use crate::solution::{Limited, Solution};
 pub use crate::solve::GmresParams;
 pub use crate::visibility::{analyze as analyze_visibility, VisibilityAnalysis};

@@ -1,5 +1,5 @@
 //! Which geometric operator a solve stores: the dense N×N matrix, or the
-//! hierarchical matrix of [`crate::hmatrix`] (the same entries, far blocks
+//! hierarchical matrix of `crate::hmatrix` (the same entries, far blocks
 //! compressed to a relative tolerance), and why.
 
 use super::size::{available_memory, usable, MemoryEstimate, MemoryUse};
@@ -59,13 +59,13 @@ pub struct OperatorDecision {
     pub switchable: bool,
     /// The compressed operator's relative error of a product, measured at
     /// [`SAMPLED_ROWS`] rows against their exact entries
-    /// ([`crate::hmatrix::HMatrix::sampled_error`]); None when dense.
+    /// (`crate::hmatrix::HMatrix::sampled_error`); None when dense.
     pub sampled_error: Option<f64>,
     /// The compressed operator's bytes as predicted from the geometry
     /// before the plan was built ([`HPrediction::bytes`]); None when dense.
     pub predicted_bytes: Option<f64>,
     /// The same predicted again from the plan, before a block is computed
-    /// ([`PlanEntries::predict`]): occlusion's dense leaves included, so on
+    /// (`PlanEntries::predict`): occlusion's dense leaves included, so on
     /// occluded scenes it is the closer (low-rank blocks still counted at
     /// rank 1); None when dense.
     pub planned_bytes: Option<f64>,

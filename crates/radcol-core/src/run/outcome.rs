@@ -40,13 +40,13 @@ pub struct SolverReport {
     /// True relative residual ‖b - A x‖ / ‖b‖.
     pub residual: f64,
     /// GMRES's ‖A‖ ‖x‖ / ‖b‖, a lower bound of the condition number
-    /// ([`crate::solve::GmresInfo::growth`]); None for LU.
+    /// (`crate::solve::GmresInfo::growth`); None for LU.
     pub growth: Option<f64>,
     /// LU's estimate of the condition number κ₁(A)
-    /// ([`crate::solve::DenseLu::condition_estimate`]); None for GMRES.
+    /// (`crate::solve::DenseLu::condition_estimate`); None for GMRES.
     pub condition: Option<f64>,
     /// GMRES stopped at the rounding floor of the system, above `--tol`
-    /// ([`crate::solve::ROUNDING_FLOOR`]).
+    /// (`ROUNDING_FLOOR`).
     pub at_rounding_floor: bool,
 }
 

@@ -21,7 +21,7 @@ use std::sync::Arc;
 /// ρ and E given at the nodes of its discretization.
 ///
 /// ```no_run
-/// # use radcol_core::{assembly::CpuBackend, geometry::shapes::sphere, problem::{Field, Problem}};
+/// # use radcol_core::{backend::CpuBackend, run::shapes::sphere, run::{Field, Problem}};
 /// # use radcol_core::run::{solve, Relighter, SolveConfig};
 /// # use std::sync::Arc;
 /// let surface = Arc::new(sphere(1.0));
@@ -31,7 +31,7 @@ use std::sync::Arc;
 /// let mut relight = Relighter::new(&outcome, &cfg);
 /// let dimmer = Problem::new(surface, Field::Constant(0.5), Field::Constant(0.2));
 /// let channels = relight.solve(&dimmer)?; // no assembly
-/// # Ok::<(), radcol_core::error::Error>(())
+/// # Ok::<(), radcol_core::run::Error>(())
 /// ```
 #[derive(Debug)]
 pub struct Relighter<'a> {

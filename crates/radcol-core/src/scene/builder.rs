@@ -17,7 +17,7 @@ use std::collections::HashMap;
 /// repairs are those of the [module](super).
 ///
 /// ```
-/// use radcol_core::assembly::CpuBackend;
+/// use radcol_core::backend::CpuBackend;
 /// use radcol_core::run::{solve, SolveConfig};
 /// use radcol_core::scene::{Material, SceneBuilder};
 /// use glam::Vec3;

@@ -1,7 +1,7 @@
 //! Scenes for graphics users: triangle meshes with materials (OBJ files, built-ins, vertex/index buffers).
 //!
-//! A [`Scene`] is a flat-faceted [`Surface`] (one [`Patch`] per OBJ group and
-//! material, map [`Identity`], triangles in world coordinates) with one
+//! A [`Scene`] is a flat-faceted [`Surface`] (one `Patch` per OBJ group and
+//! material, map `Identity`, triangles in world coordinates) with one
 //! [`Material`] per patch, an optional [`Camera`] and the warnings its input
 //! produced. It turns into a three-channel [`Problem`] ("R", "G", "B") with
 //! [`Scene::problem`].

@@ -14,11 +14,13 @@
 //! free. Only the operator apply is parallel: for `n <= ~30000` the `O(n^2)`
 //! mat-vec dominates the `O(n m)` vector work.
 
-use super::{all_finite, max_abs, unscale, LinearOperator, SolveError};
+use super::{all_finite, max_abs, unscale, SolveError};
+#[cfg(any(test, feature = "internals"))]
+use super::LinearOperator;
 use crate::matrix::dot;
 use std::ops::ControlFlow;
 
-/// Options for [`gmres`].
+/// Options for `gmres`.
 #[derive(Clone, Debug)]
 pub struct GmresParams {
     /// Stop when the relative residual `||b - A x|| / ||b||` is at most this.
@@ -46,6 +48,10 @@ pub struct GmresInfo {
     /// Total iterations (Krylov-loop operator applications) over all cycles.
     pub iterations: usize,
     /// Number of restarts: restart cycles begun after the first one.
+    #[cfg_attr(
+        not(any(test, feature = "internals")),
+        allow(dead_code, reason = "read by the solver tests and benches")
+    )]
     pub restarts: usize,
     /// True relative residual `||b - A x|| / ||b||` of the returned `x`,
     /// recomputed with one extra operator apply (not the Arnoldi estimate).
@@ -56,7 +62,7 @@ pub struct GmresInfo {
     pub growth: f64,
     /// True when `rel_tol` was below what f64 can deliver for this system and
     /// the iteration stopped at the rounding floor instead
-    /// ([`ROUNDING_FLOOR`] `ε (||A|| ||x|| + ||b||)`, a backward error of a
+    /// (`ROUNDING_FLOOR` `ε (||A|| ||x|| + ||b||)`, a backward error of a
     /// few dozen ulps).
     pub at_rounding_floor: bool,
 }
@@ -83,7 +89,7 @@ pub const ROUNDING_FLOOR: f64 = 64.0;
 /// Convergence is declared only on the *true* residual `||b - A x||`,
 /// recomputed at the start of every cycle: `Ok(info)` guarantees
 /// `info.residual <= params.rel_tol`, or `info.at_rounding_floor` (see
-/// [`ROUNDING_FLOOR`]).
+/// `ROUNDING_FLOOR`).
 ///
 /// # Errors
 /// * [`SolveError::DimensionMismatch`] if `b` or `x` is not of length `op.dim()`;
@@ -92,6 +98,7 @@ pub const ROUNDING_FLOOR: f64 = 64.0;
 /// * [`SolveError::NotConverged`] if `params.max_iters` iterations did not
 ///   reach `params.rel_tol` (with the true relative residual of `x`);
 /// * [`SolveError::Overflow`] if the solution is beyond the largest f64.
+#[cfg(any(test, feature = "internals"))]
 pub fn gmres(
     op: &dyn LinearOperator,
     b: &[f64],
@@ -106,6 +113,7 @@ pub fn gmres(
 /// checked at each restart, as in [`gmres`]); `ControlFlow::Break` stops the
 /// iteration with [`SolveError::Stopped`], `x` holding the start of the
 /// cycle (progress bars, cancellation).
+#[cfg(any(test, feature = "internals"))]
 pub fn gmres_observed(
     op: &dyn LinearOperator,
     b: &[f64],
@@ -168,7 +176,7 @@ pub(super) struct Krylov<'p> {
     cycles: usize,
     /// The largest ||A v|| over unit Krylov vectors v: a lower bound of ||A||.
     a_norm: f64,
-    /// The rounding floor of this cycle (see [`ROUNDING_FLOOR`]).
+    /// The rounding floor of this cycle (see `ROUNDING_FLOOR`).
     floor: f64,
     /// The Arnoldi step awaiting A v_j, or None while the cycle's true
     /// residual awaits A x.

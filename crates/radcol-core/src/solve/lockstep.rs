@@ -20,7 +20,7 @@ pub struct RadiositySystem<'a> {
     pub rho: &'a [f64],
     /// The right-hand side (emission at the nodes).
     pub b: &'a [f64],
-    /// Initial guess on entry; solution on exit, as in [`super::gmres`].
+    /// Initial guess on entry; solution on exit, as in `gmres`.
     pub x: &'a mut [f64],
 }
 

@@ -14,6 +14,7 @@
 //! matters at n ≈ 30000, 7.2 GB per matrix).
 
 use super::{all_finite, max_abs, unscale, SolveError};
+#[cfg(any(test, feature = "internals"))]
 use crate::matrix::DenseMatrix;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
@@ -61,6 +62,7 @@ impl DenseLu {
     /// * [`SolveError::NonFinite`] if `a` contains NaN or infinity;
     /// * [`SolveError::Singular`] if a pivot (diagonal of U) is zero or not
     ///   finite.
+    #[cfg(any(test, feature = "internals"))]
     pub fn factor(a: &DenseMatrix) -> Result<Self, SolveError> {
         let n = a.nrows();
         if a.ncols() != n {

@@ -2,7 +2,7 @@
 //!
 //! Two solvers, because the two regimes need different tools: the system
 //! matrix is dense and well conditioned (`rho < 1`, `G` has row sums `<= 1`),
-//! so restarted GMRES ([`gmres`]) converges in a handful of mat-vecs and never
+//! so restarted GMRES (`gmres`) converges in a handful of mat-vecs and never
 //! needs the matrix explicitly (it can be matrix-free or GPU-backed), while a
 //! dense LU ([`DenseLu`]) is the robust reference and pays off when many
 //! right-hand sides (colour channels) share one factorisation.
@@ -15,7 +15,9 @@ mod lockstep;
 mod lu;
 mod residual;
 
-pub use gmres::{gmres, gmres_observed, GmresInfo, GmresParams, ROUNDING_FLOOR};
+pub use gmres::{GmresInfo, GmresParams};
+#[cfg(any(test, feature = "internals"))]
+pub use gmres::{gmres, gmres_observed};
 pub use lockstep::{gmres_radiosity, RadiositySystem};
 pub use lu::DenseLu;
 pub use residual::true_residual;
@@ -132,7 +134,8 @@ impl<'a> RadiosityOperator<'a> {
     }
 
     /// The explicit matrix `I - diag(rho) gm` (for [`DenseLu`]).
-    pub fn to_dense(&self) -> DenseMatrix {
+    #[cfg(any(test, feature = "internals"))]
+    pub fn to_dense(self) -> DenseMatrix {
         self.assert_shape();
         let n = self.gm.nrows();
         let mut a = DenseMatrix::zeros(n, n);
@@ -179,6 +182,7 @@ impl LinearOperator for RadiosityOperator<'_> {
 /// `A = I - diag(rho) g` for any geometric operator `g` (a compressed one,
 /// for example): only products, for GMRES.
 #[derive(Clone, Copy)]
+#[cfg(any(test, feature = "internals"))]
 pub struct ImplicitRadiosity<'a> {
     /// The geometric operator.
     pub g: &'a dyn LinearOperator,
@@ -186,6 +190,7 @@ pub struct ImplicitRadiosity<'a> {
     pub rho: &'a [f64],
 }
 
+#[cfg(any(test, feature = "internals"))]
 impl<'a> ImplicitRadiosity<'a> {
     /// Checks that `rho` has `g`'s dimension.
     pub fn new(g: &'a dyn LinearOperator, rho: &'a [f64]) -> Result<Self, SolveError> {
@@ -199,6 +204,7 @@ impl<'a> ImplicitRadiosity<'a> {
     }
 }
 
+#[cfg(any(test, feature = "internals"))]
 impl std::fmt::Debug for ImplicitRadiosity<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("ImplicitRadiosity")
@@ -207,6 +213,7 @@ impl std::fmt::Debug for ImplicitRadiosity<'_> {
     }
 }
 
+#[cfg(any(test, feature = "internals"))]
 impl LinearOperator for ImplicitRadiosity<'_> {
     fn dim(&self) -> usize {
         self.g.dim()

@@ -50,7 +50,7 @@ pub struct StudyRow {
     /// Kernel evaluations of the assembly.
     pub kernel_evals: u64,
     /// True when the problem has no exact solution and the error columns are
-    /// the a posteriori estimate ([`crate::estimate`]): `global_max` and `l2`
+    /// the a posteriori estimate (`crate::estimate`): `global_max` and `l2`
     /// estimated, `nodes_max` not estimable (η vanishes at the nodes: NaN).
     pub estimated: bool,
     /// The estimate's max and L² (absolute, first channel), when estimated.

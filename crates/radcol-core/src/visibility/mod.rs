@@ -133,6 +133,7 @@ pub fn analyze(surface: &Surface) -> VisibilityAnalysis {
 }
 
 /// True when every triangle has all vertices of `tris` on its front side.
+#[cfg(any(test, feature = "scenes", feature = "internals"))]
 pub fn is_convex_enclosure(tris: &[[DVec3; 3]]) -> bool {
     concave_witness(tris).is_none()
 }

@@ -26,7 +26,7 @@ mod batch;
 mod rows;
 mod self_pair;
 mod split;
-pub use self_pair::{SelfRules, MAX_SELF_DEPTH};
+pub use self_pair::SelfRules;
 
 /// How partly visible pairs (scenes that occlude) are integrated.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]

@@ -26,7 +26,7 @@ pub enum PairClass {
     /// Partly visible pair in a scene that can occlude (CPU): some triangle
     /// meets the hull of the two elements, or the element straddles the
     /// tangent plane of the block's element. Each row integrates over the
-    /// exactly clipped visible part ([`crate::visibility::clip::visible_region`]).
+    /// exactly clipped visible part (`crate::visibility::clip::visible_region`).
     Partial,
     /// Near pair: adaptive subdivision (CPU).
     Near,

@@ -25,7 +25,7 @@ impl AssemblyPlan {
     /// Integrates the basis times G over the part of element `k` visible from
     /// the point (`position`, `normal`) of element `kp`, for a pair classed
     /// [`PairClass::Partial`]: the visible region is clipped exactly
-    /// ([`clip::visible_region`]) and each convex piece integrated adaptively.
+    /// (`clip::visible_region`) and each convex piece integrated adaptively.
     /// Overwrites `out` (f_r values); returns kernel evaluations.
     ///
     /// # Panics

@@ -24,12 +24,11 @@ mod tables;
 pub use class_table::{
     elements_within as pair_table_elements, estimated_bytes as pair_table_bytes,
 };
-pub use class_table::{ClassTable, Runs};
+pub use class_table::ClassTable;
 pub use classify::PairClass;
-pub use kernels::far_kernel_row;
 pub use reuse::Unchanged;
 pub use sample::RowCost;
-pub use tables::{FarSpan, FarTable};
+pub use tables::FarTable;
 
 use super::integrate::{ElementIntegrator, QuadratureOptions, SelfRules, Shortfall, ShortfallLog};
 use crate::discretization::Discretization;
@@ -80,7 +79,7 @@ pub enum FillMode {
     FarOnly,
     /// Every entry except those of pairs of two unchanged elements, in a
     /// plan built by [`AssemblyPlan::updating`] (whose entries are the old
-    /// matrix's: [`Unchanged::copy_blocks`]); `All` in other plans.
+    /// matrix's: `Unchanged::copy_blocks`); `All` in other plans.
     NotReused,
 }
 

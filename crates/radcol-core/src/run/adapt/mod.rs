@@ -1,4 +1,4 @@
-//! Adaptive refinement to a tolerance: solve, estimate ([`crate::estimate`]),
+//! Adaptive refinement to a tolerance: solve, estimate (`crate::estimate`),
 //! split the elements whose estimate is large 4:1, solve again, until the
 //! estimated max error of what is shown (u_n, or u_n limited to nonnegative
 //! values with the limiter's change added) relative to max |u_n| is below
@@ -14,7 +14,7 @@
 //! ([`AssemblyPlan::updating`](crate::assembly::AssemblyPlan::updating)):
 //! only the rows and columns of new elements are integrated. The estimate
 //! is updated from the previous step's where u_n changed little away from
-//! the new elements ([`crate::estimate::estimate_updated`]). Elements whose
+//! the new elements (`crate::estimate::estimate_updated`). Elements whose
 //! estimate stops falling under refinement are no longer split
 //! (`history.rs`); the loop then names where they are. With
 //! [`AdaptOptions::hp`] a marked element may instead be raised one degree,

@@ -43,7 +43,7 @@ pub struct AdaptOptions {
     /// steps and 7 710 unknowns with 3 stalled generations).
     pub stall_generations: u32,
     /// A step's estimate may be updated from the previous step's instead of
-    /// computed afresh ([`crate::estimate::estimate_updated`]) when it is
+    /// computed afresh (`crate::estimate::estimate_updated`) when it is
     /// then within this fraction of the marking threshold
     /// (`mark_fraction · target`) of the computed one (0: computed always).
     pub estimate_within: f64,
@@ -67,7 +67,7 @@ pub struct AdaptOptions {
 }
 
 /// The smallest target accepted: the estimate's integrals are accurate to
-/// [`crate::estimate::ESTIMATE_QUAD_TOL`] of a row (1e-9), so an error
+/// `crate::estimate::ESTIMATE_QUAD_TOL` of a row (1e-9), so an error
 /// below ten times that could not be told from quadrature error, and a
 /// loop asked for it refined until memory ran out.
 pub const MIN_TARGET: f64 = 1e-8;
