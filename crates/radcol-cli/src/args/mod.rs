@@ -6,6 +6,8 @@ use radcol_core::run::{
     GmresParams, QuadratureOptions, ADAPTIVE_DEGREE, DEFAULT_COMPRESSION_TOL, DEFAULT_DEGREE,
 };
 
+#[cfg(test)]
+mod doc_commands;
 mod solve;
 mod values;
 pub use solve::SolveArgs;
