@@ -1,7 +1,7 @@
 //! The CLI's one error policy: bad input exits with 2, anything else with 1,
 //! and either way exactly one line `error: ...` goes to stderr.
 
-use radcol_core::run::{Error as CoreError, InputError};
+use radcol_core::run::{Error as CoreError, FieldKind, InputError};
 use std::fmt;
 
 /// Exit code for bad input (arguments, scenes, expressions, values, files in the way).
@@ -73,15 +73,17 @@ pub fn with_flags(err: CoreError) -> anyhow::Error {
         .into(),
         // Values of the scalar problem's fields come from these flags (a
         // scene's per-channel ones, "reflectivity R", from its materials).
-        CoreError::Input(e @ InputError::Reflectivity { name, .. }) if name == "reflectivity" => {
-            bad_input(format!("--rho: {e}")).into()
+        CoreError::Input(
+            e @ (InputError::Reflectivity { name: field, .. }
+            | InputError::InvalidValue { what: field, .. }),
+        ) if field.channel.is_none() => {
+            let flag = match field.kind {
+                FieldKind::Reflectivity => "--rho",
+                FieldKind::Emission => "--emission",
+                FieldKind::ExactSolution => "--exact",
+            };
+            bad_input(format!("{flag}: {e}")).into()
         }
-        CoreError::Input(e @ InputError::InvalidValue { what, .. }) => match what.as_str() {
-            "reflectivity" => bad_input(format!("--rho: {e}")).into(),
-            "emission" => bad_input(format!("--emission: {e}")).into(),
-            "exact solution" => bad_input(format!("--exact: {e}")).into(),
-            _ => anyhow::Error::new(err),
-        },
         _ => anyhow::Error::new(err),
     }
 }

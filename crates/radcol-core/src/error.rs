@@ -2,6 +2,41 @@
 
 use glam::DVec3;
 
+/// Which of a problem's fields a value belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FieldKind {
+    /// The reflectivity ρ.
+    Reflectivity,
+    /// The emission E.
+    Emission,
+    /// The exact solution u given to measure errors against.
+    ExactSolution,
+}
+
+/// A field of a problem, of one colour channel or of a scalar problem, as
+/// messages name it: "reflectivity", "emission R".
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FieldName {
+    /// Which field.
+    pub kind: FieldKind,
+    /// The channel's name; None for a scalar problem (and the exact solution).
+    pub channel: Option<String>,
+}
+
+impl std::fmt::Display for FieldName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self.kind {
+            FieldKind::Reflectivity => "reflectivity",
+            FieldKind::Emission => "emission",
+            FieldKind::ExactSolution => "exact solution",
+        })?;
+        match &self.channel {
+            Some(c) => write!(f, " {c}"),
+            None => Ok(()),
+        }
+    }
+}
+
 /// Bad input: every variant says what was wrong and where.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -35,8 +70,8 @@ pub enum InputError {
     /// rho outside [0, 1) at a collocation point.
     #[error("{name} = {value} at element {element}, node {node} (x, y, z = {:.6}, {:.6}, {:.6}) lies outside [0, 1)", position.x, position.y, position.z)]
     Reflectivity {
-        /// "reflectivity" or "reflectivity R" (the channel).
-        name: String,
+        /// The reflectivity, of its channel when there are several.
+        name: FieldName,
         /// The offending value.
         value: f64,
         /// Element index.
@@ -50,7 +85,7 @@ pub enum InputError {
     #[error("{what} = {value} at element {element}, node {node} (x, y, z = {:.6}, {:.6}, {:.6}) is not a valid value", position.x, position.y, position.z)]
     InvalidValue {
         /// Which field ("emission R", "exact solution").
-        what: String,
+        what: FieldName,
         /// The offending value.
         value: f64,
         /// Element index.

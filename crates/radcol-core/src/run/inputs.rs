@@ -7,7 +7,7 @@ use super::size::mesh_size;
 use super::SolveConfig;
 use crate::assembly::MIN_QUAD_TOL;
 use crate::discretization::Discretization;
-use crate::error::{Error, InputError};
+use crate::error::{Error, FieldKind, FieldName, InputError};
 use crate::mesh::grading::{Grading, GRADE_RANGE};
 use crate::mesh::Mesh;
 use crate::nodes::NodeSet;
@@ -141,7 +141,11 @@ pub(crate) fn check_quadrature(cfg: &SolveConfig) -> Result<(), InputError> {
 }
 
 /// Evaluates `field` at every collocation point, rejecting non-finite values.
-fn eval_at_nodes(disc: &Discretization, field: &Field, what: &str) -> Result<Vec<f64>, InputError> {
+fn eval_at_nodes(
+    disc: &Discretization,
+    field: &Field,
+    what: FieldName,
+) -> Result<Vec<f64>, InputError> {
     let mesh = disc.mesh();
     let values: Vec<f64> = disc
         .points()
@@ -151,7 +155,7 @@ fn eval_at_nodes(disc: &Discretization, field: &Field, what: &str) -> Result<Vec
     if let Some((i, &v)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         let p = disc.points()[i];
         return Err(InputError::InvalidValue {
-            what: what.into(),
+            what,
             value: v,
             element: p.element,
             node: p.node,
@@ -170,20 +174,21 @@ pub(crate) fn fields(disc: &Discretization, problem: &Problem) -> Result<Vec<Nod
     // Errors against an exact u that is not finite everywhere would be ∞ or
     // NaN; checked first, as a manufactured E would inherit the fault.
     if let Some(exact) = &problem.exact {
-        eval_at_nodes(disc, exact, "exact solution")?;
+        let what = FieldName {
+            kind: FieldKind::ExactSolution,
+            channel: None,
+        };
+        eval_at_nodes(disc, exact, what)?;
     }
     let single = problem.channels.len() == 1;
     let mut fields = Vec::new();
     for ch in &problem.channels {
         // "reflectivity" alone for a scalar problem, "reflectivity R" for a colour channel.
-        let label = |what: &str| {
-            if single {
-                what.to_string()
-            } else {
-                format!("{what} {}", ch.name)
-            }
+        let label = |kind: FieldKind| FieldName {
+            kind,
+            channel: (!single).then(|| ch.name.clone()),
         };
-        let rho = eval_at_nodes(disc, &ch.rho, &label("reflectivity"))?;
+        let rho = eval_at_nodes(disc, &ch.rho, label(FieldKind::Reflectivity))?;
         if let Some((i, &v)) = rho
             .iter()
             .enumerate()
@@ -191,7 +196,7 @@ pub(crate) fn fields(disc: &Discretization, problem: &Problem) -> Result<Vec<Nod
         {
             let p = disc.points()[i];
             return Err(InputError::Reflectivity {
-                name: label("reflectivity"),
+                name: label(FieldKind::Reflectivity),
                 value: v,
                 element: p.element,
                 node: p.node,
@@ -199,7 +204,7 @@ pub(crate) fn fields(disc: &Discretization, problem: &Problem) -> Result<Vec<Nod
             }
             .into());
         }
-        let emission = eval_at_nodes(disc, &ch.emission, &label("emission"))?;
+        let emission = eval_at_nodes(disc, &ch.emission, label(FieldKind::Emission))?;
         fields.push((rho, emission));
     }
     Ok(fields)

@@ -33,7 +33,7 @@ pub use crate::assembly::{
     pair_table_bytes, pair_table_elements, QuadratureOptions, VisibilityMode, MIN_QUAD_TOL,
 };
 pub use crate::discretization::Discretization;
-pub use crate::error::{Error, InputError};
+pub use crate::error::{Error, FieldKind, FieldName, InputError};
 pub use crate::estimate::ErrorEstimate;
 pub use crate::geometry::{shapes, Surface};
 pub use crate::hmatrix::radiosity::predict as predict_compressed_from_geometry;
