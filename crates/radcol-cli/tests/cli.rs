@@ -478,7 +478,18 @@ fn bad_input_gives_one_line_and_exit_code_two() {
     assert_one_line_error(
         &["solve", "sphere", "--level", "0", "--rho", "1.5"],
         2,
-        &["1.5", "[0, 1)"],
+        &["--rho: reflectivity = 1.5", "[0, 1)"],
+    );
+    // Values that are not numbers at the nodes name the flag they came from.
+    assert_one_line_error(
+        &["solve", "sphere", "--level", "0", "--emission", "sqrt(-1 - x*x)"],
+        2,
+        &["--emission: emission = NaN", "not a valid value"],
+    );
+    assert_one_line_error(
+        &["solve", "sphere", "--level", "0", "--exact", "sqrt(-1 - x*x)"],
+        2,
+        &["--exact: exact solution = NaN", "not a valid value"],
     );
     assert_one_line_error(
         &["solve", "torus"],
