@@ -482,12 +482,26 @@ fn bad_input_gives_one_line_and_exit_code_two() {
     );
     // Values that are not numbers at the nodes name the flag they came from.
     assert_one_line_error(
-        &["solve", "sphere", "--level", "0", "--emission", "sqrt(-1 - x*x)"],
+        &[
+            "solve",
+            "sphere",
+            "--level",
+            "0",
+            "--emission",
+            "sqrt(-1 - x*x)",
+        ],
         2,
         &["--emission: emission = NaN", "not a valid value"],
     );
     assert_one_line_error(
-        &["solve", "sphere", "--level", "0", "--exact", "sqrt(-1 - x*x)"],
+        &[
+            "solve",
+            "sphere",
+            "--level",
+            "0",
+            "--exact",
+            "sqrt(-1 - x*x)",
+        ],
         2,
         &["--exact: exact solution = NaN", "not a valid value"],
     );

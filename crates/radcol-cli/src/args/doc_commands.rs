@@ -3,123 +3,11 @@
 //! scene files it reads are in the repository. Commands with placeholders
 //! (`SCENE`, `[--flag]`, `a|b`, `…`) are left out; the test counts both.
 
+use super::docs_shown::scene_file;
+use super::docs_shown::{commands, has_placeholder, package_dir, pages, root, runnable, words};
 use crate::args::Cli;
 use clap::Parser;
-use std::path::{Path, PathBuf};
-
-/// The repository's root.
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-/// The markdown files whose commands are checked.
-fn pages() -> Vec<PathBuf> {
-    let mut pages = vec![
-        root().join("README.md"),
-        root().join("crates/radcol-gpu/README.md"),
-    ];
-    let docs = std::fs::read_dir(root().join("docs")).expect("docs/");
-    let mut more: Vec<PathBuf> = docs
-        .map(|e| e.expect("entry").path())
-        .filter(|p| p.extension().is_some_and(|e| e == "md"))
-        .collect();
-    more.sort();
-    pages.extend(more);
-    pages
-}
-
-/// The `radcol …` commands of `text`: lines of code blocks (fenced or
-/// indented) and inline code spans, with `cargo run --release [-p
-/// radcol-cli] --` read as `radcol`.
-fn commands(text: &str) -> Vec<String> {
-    let mut found = Vec::new();
-    let mut take = |s: &str| {
-        let s = s.trim().trim_start_matches("$ ");
-        let s = s.split(" #").next().unwrap_or(s).trim();
-        for prefix in [
-            "cargo run --release -p radcol-cli -- ",
-            "cargo run --release -- ",
-            "radcol ",
-        ] {
-            if let Some(rest) = s.strip_prefix(prefix) {
-                found.push(format!("radcol {rest}"));
-                return;
-            }
-        }
-    };
-    let mut fenced = false;
-    for line in text.lines() {
-        if line.trim_start().starts_with("```") {
-            fenced = !fenced;
-            continue;
-        }
-        if fenced || line.starts_with("    ") {
-            take(line);
-        } else {
-            for (i, span) in line.split('`').enumerate() {
-                if i % 2 == 1 {
-                    take(span);
-                }
-            }
-        }
-    }
-    found
-}
-
-/// Whether `command` holds a placeholder rather than a value (a word in
-/// capitals: `SCENE`, `R`, `MAX_TRIANGLES`).
-fn has_placeholder(command: &str) -> bool {
-    command.contains(['[', '|', '…', '<'])
-        || command.contains("...")
-        || command.split_whitespace().any(|w| {
-            let letters: String = w.chars().filter(|c| c.is_alphabetic()).collect();
-            !letters.is_empty() && letters.chars().all(|c| c.is_uppercase())
-        })
-}
-
-/// `command` split as a shell would (single and double quotes).
-fn words(command: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut word = String::new();
-    let mut quote: Option<char> = None;
-    let mut any = false;
-    for c in command.chars() {
-        match (quote, c) {
-            (Some(q), c) if c == q => quote = None,
-            (Some(_), c) => word.push(c),
-            (None, '\'' | '"') => {
-                quote = Some(c);
-                any = true;
-            }
-            (None, c) if c.is_whitespace() => {
-                if any || !word.is_empty() {
-                    out.push(std::mem::take(&mut word));
-                }
-                any = false;
-            }
-            (None, c) => {
-                word.push(c);
-                any = true;
-            }
-        }
-    }
-    if any || !word.is_empty() {
-        out.push(word);
-    }
-    out
-}
-
-/// The scene file `radcol solve|study|info` reads, when its first
-/// argument is a file rather than a built-in.
-fn scene_file(words: &[String]) -> Option<&str> {
-    let sub = words.get(1)?;
-    if !["solve", "study", "info"].contains(&sub.as_str()) {
-        return None;
-    }
-    let scene = words.get(2)?;
-    let file = [".obj", ".gltf", ".glb"].iter().any(|e| scene.ends_with(e));
-    file.then_some(scene.as_str())
-}
+use std::path::Path;
 
 #[test]
 fn every_command_in_the_docs_is_accepted() {
@@ -132,13 +20,7 @@ fn every_command_in_the_docs_is_accepted() {
             .unwrap_or(&page)
             .display()
             .to_string();
-        for command in commands(&text) {
-            // `radcol solve` named in prose, or a report's first line
-            // (`radcol study: sphere, …`), is no command to run.
-            let second = command.split_whitespace().nth(1).unwrap_or_default();
-            if command.split_whitespace().count() < 3 || second.ends_with(':') {
-                continue;
-            }
+        for command in runnable(&text) {
             if has_placeholder(&command) {
                 skipped += 1;
                 continue;
@@ -196,15 +78,6 @@ fn commands_are_found_in_blocks_and_spans_and_placeholders_are_told() {
         ["radcol", "solve", "sphere", "--exact", "x*y + z"]
     );
     assert!(Cli::try_parse_from(words("radcol solve cornell --no-such-flag")).is_err());
-}
-
-/// The directory of package `name`'s sources.
-fn package_dir(name: &str) -> PathBuf {
-    match name {
-        "radcol-benches" => root().join("benches"),
-        "radcol-tests" => root().join("tests"),
-        other => root().join("crates").join(other),
-    }
 }
 
 /// Every `cargo run -p P --example E` and `cargo bench -p P --bench B`

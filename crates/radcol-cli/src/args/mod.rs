@@ -8,6 +8,8 @@ use radcol_core::run::{
 
 #[cfg(test)]
 mod doc_commands;
+#[cfg(test)]
+mod docs_shown;
 mod solve;
 mod values;
 pub use solve::SolveArgs;

@@ -1,0 +1,81 @@
+//! Runs every command that the README and docs/ show (those without
+//! placeholders), each in a fresh directory for the files it writes, and
+//! fails naming each one that does not exit 0. Some take minutes (the
+//! bunny room to 1e-2, the Cornell box to 1e-4): about an hour on 2 cores,
+//! so it is left out of the default run:
+//!
+//! ```text
+//! cargo test --release -p radcol-cli --test docs_run -- --ignored --nocapture
+//! ```
+//!
+//! The default tests parse the same commands with the command's own
+//! argument parser (`src/args/doc_commands.rs`).
+
+#[allow(dead_code)]
+#[path = "../src/args/docs_shown.rs"]
+mod shown;
+
+use std::path::Path;
+use std::process::Command;
+use std::time::Instant;
+
+/// The flags whose value is a file the command writes.
+const WRITES: [&str; 4] = ["--out", "--error-map", "--plot", "--at-out"];
+
+#[test]
+#[ignore = "runs every command of the docs: about an hour"]
+fn every_command_in_the_docs_runs() {
+    let root = shown::root();
+    let mut failures = Vec::new();
+    let mut ran = 0;
+    for page in shown::pages() {
+        let text = std::fs::read_to_string(&page).expect("readable page");
+        let name = page
+            .strip_prefix(&root)
+            .unwrap_or(&page)
+            .display()
+            .to_string();
+        for command in shown::runnable(&text) {
+            if shown::has_placeholder(&command) {
+                continue;
+            }
+            let mut words = shown::words(&command);
+            // A scene made by an earlier step of the page (a bench example's
+            // output) is not in the repository.
+            if let Some(file) = shown::scene_file(&words) {
+                if !root.join(file).exists() {
+                    eprintln!("{name}: `{command}`: left out, {file} is made by a step before it");
+                    continue;
+                }
+            }
+            let dir =
+                std::env::temp_dir().join(format!("radcol-docs-{}-{ran}", std::process::id()));
+            std::fs::create_dir_all(&dir).expect("temporary directory");
+            for i in 1..words.len() {
+                if WRITES.contains(&words[i - 1].as_str()) {
+                    let file = Path::new(&words[i]).file_name().expect("a file name");
+                    words[i] = dir.join(file).display().to_string();
+                }
+            }
+            let t = Instant::now();
+            let out = Command::new(env!("CARGO_BIN_EXE_radcol"))
+                .args(&words[1..])
+                .current_dir(&root)
+                .output()
+                .expect("radcol runs");
+            ran += 1;
+            let seconds = t.elapsed().as_secs_f64();
+            eprintln!(
+                "{name}: `{command}`: {:?} in {seconds:.1} s",
+                out.status.code()
+            );
+            if !out.status.success() {
+                let err = String::from_utf8_lossy(&out.stderr);
+                failures.push(format!("{name}: `{command}`: {}", err.trim()));
+            }
+            let _ = std::fs::remove_dir_all(&dir);
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    assert!(ran >= 30, "{ran} commands ran");
+}
