@@ -48,7 +48,7 @@ pub use glam::{self, DVec3};
 pub use crate::progress::Cancel;
 pub use crate::radiosity::{CornerValues, Error, Radiosity, Refinement, Settings};
 #[cfg(feature = "export")]
-pub use crate::radiosity::{Lightmap, LightmapFormat, MeshFormat};
+pub use crate::radiosity::{ImageFormat, Lightmap, LightmapFormat, MeshFormat};
 pub use crate::scene::MaterialChange;
 use std::path::Path;
 

@@ -34,7 +34,7 @@ pub use error::Error;
 #[cfg(feature = "export")]
 pub use lightmap::{Lightmap, LightmapFormat};
 #[cfg(feature = "export")]
-pub use write::MeshFormat;
+pub use write::{ImageFormat, MeshFormat};
 
 use crate::alpha0::auto_alpha;
 use crate::assembly::{AssemblyBackend, CpuBackend};

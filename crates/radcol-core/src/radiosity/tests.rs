@@ -595,3 +595,31 @@ fn the_nodes_csv_reads_back() {
     assert_eq!(header.len(), 5 + 3);
     assert!(body.iter().all(|row| row[5..].iter().all(|&u| u == 0.0)));
 }
+
+/// A written PNG decodes (with the png crate) to the size asked, showing
+/// the lit room; a written EXR starts with the format's magic number.
+#[test]
+fn the_written_image_reads_back() {
+    let solved = solved();
+    let options = RenderOptions {
+        width: 48,
+        height: 32,
+        ..RenderOptions::default()
+    };
+    let tone = crate::render::ToneMap::default();
+    let mut png = Vec::new();
+    solved
+        .write_image(&mut png, None, &options, ImageFormat::Png, &tone)
+        .unwrap();
+    let mut reader = png::Decoder::new(std::io::Cursor::new(png)).read_info().unwrap();
+    let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
+    let frame = reader.next_frame(&mut pixels).unwrap();
+    assert_eq!((frame.width, frame.height), (48, 32));
+    let lit = pixels.iter().filter(|&&b| b > 16).count();
+    assert!(lit > pixels.len() / 4, "{lit} of {} bytes lit", pixels.len());
+    let mut exr = Vec::new();
+    solved
+        .write_image(&mut exr, None, &options, ImageFormat::Exr, &tone)
+        .unwrap();
+    assert_eq!(&exr[..4], &[0x76, 0x2f, 0x31, 0x01]);
+}

@@ -1,10 +1,21 @@
-//! A solved scene written as a mesh with its light: the input's triangles
-//! with the shown values at their corners, as PLY or glTF.
+//! A solved scene written as a mesh with its light (the input's triangles
+//! with the shown values at their corners, as PLY or glTF) or as an image
+//! (PNG, EXR).
 
 use super::{Error, Radiosity};
-use crate::export::{gltf, ply};
-use crate::render::{Corners, ToneMap};
+use crate::camera::Camera;
+use crate::export::{self, gltf, ply, ExportError};
+use crate::render::{tone_map, Corners, RenderOptions, ToneMap};
 use std::io::Write;
+
+/// The image files [`Radiosity::write_image`] writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// 8-bit sRGB, tone-mapped.
+    Png,
+    /// Linear radiance, 32-bit float RGB (OpenEXR).
+    Exr,
+}
 
 /// The mesh formats [`Radiosity::write_mesh`] writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,6 +52,36 @@ impl Radiosity {
             MeshFormat::Ply => ply::write(w, &vertices, &["R", "G", "B"], tone, None)?,
             MeshFormat::Gltf => gltf::write_gltf(w, &vertices, tone, &layout())?,
             MeshFormat::Glb => gltf::write_glb(w, &vertices, tone, &layout())?,
+        }
+        Ok(())
+    }
+
+    /// Renders the shown values from `camera` (None: the scene's own, or
+    /// one chosen to show its lit sides; as [`Radiosity::render`]) and
+    /// writes the image to `w` as `format`, tone-mapped by `tone` for PNG.
+    pub fn write_image<W: Write>(
+        &self,
+        mut w: W,
+        camera: Option<&Camera>,
+        options: &RenderOptions,
+        format: ImageFormat,
+        tone: &ToneMap,
+    ) -> Result<(), Error> {
+        let image = self.render(camera, options)?;
+        match format {
+            ImageFormat::Png => {
+                let pixels = tone_map(&image, tone);
+                export::png::write(w, image.width, image.height, &pixels)?;
+            }
+            ImageFormat::Exr => {
+                // EXR needs to seek: encoded in memory, then written.
+                let mut exr = std::io::Cursor::new(Vec::new());
+                export::exr::write(&mut exr, &image)?;
+                w.write_all(exr.get_ref()).map_err(|e| ExportError::Write {
+                    what: "EXR: writing the file".into(),
+                    source: Box::new(e),
+                })?;
+            }
         }
         Ok(())
     }
