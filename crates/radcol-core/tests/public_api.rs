@@ -2,9 +2,9 @@
 //! change to it is made on purpose: every public declaration of the
 //! modules declared `pub` (their `pub` items and re-exports, the `pub`
 //! fields of their structs and the `pub` methods of their types, with
-//! signatures as written), one per line, by file. Items that the public
-//! modules re-export from the stages behind the edge are listed by their
-//! re-export.
+//! signatures as written), one per line, by file; then, for the items
+//! that they re-export from the stages behind the edge, their declarations
+//! there (marked "behind the edge"), fields and methods included.
 //!
 //! When the test fails, read the difference it prints; if the change is
 //! meant, write the list again and commit it with the change:
@@ -13,6 +13,7 @@
 //! RADCOL_BLESS_API=1 cargo test --release -p radcol-core --test public_api
 //! ```
 
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 /// The source of `text` before its trailing test block, without comments
@@ -133,8 +134,16 @@ fn private_modules(code: &str) -> Vec<String> {
         .collect()
 }
 
-/// The listing of `file` (module path `path`) and of the modules below it.
-fn list(root: &Path, file: &Path, path: &str, out: &mut Vec<String>) {
+/// The listing of `file` (module path `path`) and of the modules below it;
+/// with `only`, just the declarations of those names (and their fields and
+/// methods).
+fn list(
+    root: &Path,
+    file: &Path,
+    path: &str,
+    only: Option<&BTreeSet<String>>,
+    out: &mut Vec<String>,
+) {
     let text = std::fs::read_to_string(file).expect("readable source");
     let code = code(&text);
     let (decls, modules) = declarations(&code);
@@ -143,21 +152,123 @@ fn list(root: &Path, file: &Path, path: &str, out: &mut Vec<String>) {
         .unwrap_or(file)
         .display()
         .to_string();
+    let shown = match only {
+        Some(_) => format!("behind the edge, {shown}"),
+        None => shown,
+    };
     // A macro's template (`pub mod $name`) declares nothing by itself.
     for d in decls.iter().filter(|d| !d.contains('$')) {
-        out.push(format!("{path} ({shown}): {d}"));
+        if only.is_none_or(|names| item_name(d).is_some_and(|n| names.contains(&n))) {
+            out.push(format!("{path} ({shown}): {d}"));
+        }
     }
     for m in modules.iter().chain(&private_modules(&code)) {
         if let Some(f) = module_file(file, m) {
-            list(root, &f, &format!("{path}::{m}"), out);
+            list(root, &f, &format!("{path}::{m}"), only, out);
         }
     }
 }
 
+/// The name a declaration (as [`declarations`] gives it) declares, or for
+/// a field or method, the name of its type.
+fn item_name(decl: &str) -> Option<String> {
+    let head = decl.split(" > ").next().unwrap_or(decl);
+    // A re-export inside the stages is plumbing: what it names is listed
+    // where it is declared.
+    if head.starts_with("pub use ") {
+        return None;
+    }
+    let mut words = head
+        .split(|c: char| c.is_whitespace() || c == '<' || c == '(' || c == ':')
+        .filter(|w| !w.is_empty());
+    let keywords = [
+        "pub", "fn", "struct", "enum", "trait", "type", "const", "static", "unsafe", "async",
+        "mod", "impl", "for",
+    ];
+    let mut name = None;
+    // `impl<T> Trait for Type` names Type; anything else its first word
+    // after the keywords.
+    for w in words.by_ref() {
+        if keywords.contains(&w) || w.starts_with('\'') || w.starts_with('>') {
+            continue;
+        }
+        name = Some(
+            w.trim_end_matches(['>', ','])
+                .rsplit("::")
+                .next()?
+                .to_string(),
+        );
+        break;
+    }
+    if head.starts_with("impl") && head.contains(" for ") {
+        let ty = head.rsplit(" for ").next()?;
+        name = Some(
+            ty.split(['<', ' '])
+                .next()?
+                .rsplit("::")
+                .next()?
+                .to_string(),
+        );
+    }
+    name
+}
+
+/// The names that the `pub use` lines of `listed` re-export (before any
+/// `as`).
+fn reexported(listed: &[String]) -> BTreeSet<String> {
+    let mut names = BTreeSet::new();
+    for line in listed {
+        let Some((_, used)) = line.split_once("pub use ") else {
+            continue;
+        };
+        let inner = used.split_once('{').map_or(used, |(_, rest)| rest);
+        for part in inner.split([',', '{', '}']) {
+            let original = part.split(" as ").next().unwrap_or(part).trim();
+            if let Some(name) = original.rsplit("::").next().filter(|n| !n.is_empty()) {
+                names.insert(name.to_string());
+            }
+        }
+    }
+    names
+}
+
+/// The modules behind the edge, as `lib.rs` declares them in `internal!`.
+fn internal_modules(lib: &str) -> Vec<String> {
+    let Some((_, rest)) = lib.split_once("internal! {") else {
+        return Vec::new();
+    };
+    let block = rest.split('}').next().unwrap_or_default();
+    block
+        .split(';')
+        .filter_map(|m| m.split_whitespace().last())
+        .filter(|m| {
+            m.chars()
+                .all(|c| c.is_ascii_lowercase() || c == '_' || c.is_ascii_digit())
+        })
+        .map(String::from)
+        .collect()
+}
+
+/// The public modules' declarations, then those of the modules behind the
+/// edge that are re-exported (with their fields and methods).
 fn listing() -> String {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src");
+    let lib = root.join("lib.rs");
     let mut out = Vec::new();
-    list(&root, &root.join("lib.rs"), "radcol_core", &mut out);
+    list(&root, &lib, "radcol_core", None, &mut out);
+    let names = reexported(&out);
+    let lib_code = code(&std::fs::read_to_string(&lib).expect("lib.rs"));
+    for m in internal_modules(&lib_code) {
+        if let Some(f) = module_file(&lib, &m) {
+            list(
+                &root,
+                &f,
+                &format!("radcol_core::{m}"),
+                Some(&names),
+                &mut out,
+            );
+        }
+    }
     out.join("\n") + "\n"
 }
 
@@ -173,8 +284,8 @@ fn the_public_api_is_the_listed_one() {
     if listed == now {
         return;
     }
-    let old: std::collections::BTreeSet<&str> = listed.lines().collect();
-    let new: std::collections::BTreeSet<&str> = now.lines().collect();
+    let old: BTreeSet<&str> = listed.lines().collect();
+    let new: BTreeSet<&str> = now.lines().collect();
     let gone: Vec<_> = old.difference(&new).collect();
     let added: Vec<_> = new.difference(&old).collect();
     panic!(
@@ -214,4 +325,16 @@ fn the_scanner_finds_items_fields_methods_and_reexports() {
     );
     assert_eq!(modules, ["a"]);
     assert_eq!(private_modules(&code), ["b"]);
+    let names: Vec<_> = decls.iter().filter_map(|d| item_name(d)).collect();
+    assert_eq!(names, ["a", "S", "S", "S", "C"]);
+    assert_eq!(
+        item_name("impl<'a> Display for Wrap<'a> > pub fn x()").as_deref(),
+        Some("Wrap")
+    );
+    let listed = ["m (m.rs): pub use x::{A, b::C as D}".to_string()];
+    assert_eq!(reexported(&listed), ["A", "C"].map(String::from).into());
+    assert_eq!(
+        internal_modules("internal! {\n    alpha0;\n    #[cfg(x)]\n    radiosity;\n}"),
+        ["alpha0", "radiosity"]
+    );
 }
