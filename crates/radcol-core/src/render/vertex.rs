@@ -11,10 +11,16 @@ use crate::mesh::Mesh;
 use crate::solution::Solution;
 use std::f64::consts::PI;
 
-/// A triangle soup with the solution at its vertices.
+/// Triangles with the solution at their vertices. Two layouts:
 ///
-/// Element k owns vertices `k·V .. (k+1)·V` with V = (n + 1)(n + 2)/2 laid out
-/// like [`super::tessellation_points`]`(n)`, and triangles `k·n² .. (k+1)·n²`.
+/// * from [`vertex_mesh`] (the elements tessellated `n` times per edge):
+///   element k owns vertices `k·V .. (k+1)·V` with V = (n + 1)(n + 2)/2
+///   laid out like [`super::tessellation_points`]`(n)`, and triangles
+///   `k·n² .. (k+1)·n²`;
+/// * from [`super::input_vertex_mesh`] (the scene's own triangles): one
+///   triangle per input triangle, in the input's order, its corners split
+///   or shared as [`super::Corners`] says; `element` names an element
+///   inside each.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct VertexMesh {
     /// Vertex positions m_k(s, t).
