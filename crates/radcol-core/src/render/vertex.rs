@@ -18,7 +18,7 @@ use std::f64::consts::PI;
 ///   laid out like [`super::tessellation_points`]`(n)`, and triangles
 ///   `k·n² .. (k+1)·n²`;
 /// * from [`super::input_vertex_mesh`] (the scene's own triangles): one
-///   triangle per input triangle, in the input's order, its corners split
+///   triangle per input triangle, patch by patch, its corners split
 ///   or shared as [`super::Corners`] says; `element` names an element
 ///   inside each.
 #[derive(Clone, Debug, Default, PartialEq)]
