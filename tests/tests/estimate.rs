@@ -88,3 +88,49 @@ fn estimate_tracks_the_error_on_the_manufactured_box() {
         &[(0, 0), (0, 1), (0, 2), (1, 0), (1, 1), (2, 0), (2, 1)],
     );
 }
+
+/// The reflected light's scale is max over the nodes of u_n − E. On the
+/// sphere u − E = (0.5 + 0.2 x) c with c = 2 sinh(a)/a (the closed form),
+/// so it is that maximum over the node positions, to within the solution's
+/// max error at the nodes.
+#[test]
+fn the_reflected_scale_is_the_closed_forms_at_the_nodes() {
+    let problem = sphere_closed_form();
+    let a = (0.3f64 * 0.3 + 0.5 * 0.5 + 0.8 * 0.8).sqrt();
+    let c = 2.0 * a.sinh() / a;
+    for (r, level) in [(1, 1), (2, 2)] {
+        let cfg = SolveConfig {
+            degree: r,
+            alpha: auto_alpha(r),
+            level,
+            ..Default::default()
+        };
+        let out = solve(&problem, &cfg, &CpuBackend).expect("solves");
+        let ch = &out.channels[0];
+        let est = ch.estimate.as_ref().expect("estimated by default");
+        let exact = out
+            .discretization
+            .points()
+            .iter()
+            .map(|p| (0.5 + 0.2 * p.position.x) * c)
+            .fold(f64::MIN, f64::max);
+        let nodal_error = ch.errors.expect("exact solution known").nodes_max;
+        let d = (est.reflected_scale - exact).abs();
+        println!(
+            "r = {r} level {level}: reflected {} against {exact}, nodal error {nodal_error:.3e}",
+            est.reflected_scale
+        );
+        // |max(a + e) − max a| ≤ max |e|, to rounding.
+        assert!(
+            d <= nodal_error + 1e-12 * exact,
+            "r = {r} level {level}: {} against {exact}",
+            est.reflected_scale
+        );
+        let rel = est.max_rel_reflected().expect("light is reflected");
+        assert_eq!(rel, est.max / est.reflected_scale);
+        assert!(
+            rel > est.max_rel,
+            "the reflected light is the smaller scale here"
+        );
+    }
+}

@@ -24,6 +24,14 @@ pub(super) fn fmt_estimate(
             .unwrap_or_default(),
         e.updated_within.map(updated).unwrap_or_default()
     )?;
+    if let Some(rel) = e.max_rel_reflected() {
+        writeln!(
+            f,
+            "              relative to the reflected light: max {} of max(u_n - E) = {} at the nodes",
+            sci(rel),
+            sci(e.reflected_scale)
+        )?;
+    }
     if e.visibility_bound > 0.0 {
         writeln!(
             f,

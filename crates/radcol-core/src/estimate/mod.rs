@@ -123,6 +123,11 @@ pub struct ErrorEstimate {
     pub scale: f64,
     /// `max / scale`.
     pub max_rel: f64,
+    /// max over the nodes of u_n − E: the light that the surfaces reflect,
+    /// the part the method computes (the emission is known exactly). On a
+    /// lit scene it is what a viewer sees on the walls, where `scale` is
+    /// the emitters' radiosity. 0 when nothing is reflected.
+    pub reflected_scale: f64,
     /// Root mean square of η over S relative to `scale`:
     /// l2 / (scale · |S|^½).
     pub rms_rel: f64,
@@ -185,6 +190,12 @@ impl ErrorEstimate {
         self.max += bound;
         let s = if self.scale > 0.0 { self.scale } else { 1.0 };
         self.max_rel = self.max / s;
+    }
+
+    /// `max` relative to the reflected light (`reflected_scale`); None when
+    /// nothing is reflected.
+    pub fn max_rel_reflected(&self) -> Option<f64> {
+        (self.reflected_scale > 0.0).then(|| self.max / self.reflected_scale)
     }
 
     /// Per element, `elements / scale`.
@@ -377,11 +388,13 @@ fn summarise(
     }
     let area = mesh.area();
     let s = if scale > 0.0 { scale } else { 1.0 };
+    let reflected = nodal.iter().zip(ch.emission_nodes).map(|(u, e)| u - e);
     ErrorEstimate {
         max,
         l2: l2sq.sqrt() * unit,
         scale,
         max_rel: max / s,
+        reflected_scale: reflected.fold(0.0, f64::max),
         rms_rel: (l2sq / area).sqrt() * unit / s,
         negative_nodes: nodal.iter().filter(|&&u| u < 0.0).count(),
         negative_points,
@@ -434,6 +447,8 @@ mod tests {
             emission_nodes: &nodal,
         };
         let e = estimate(&plan, &[fields]).remove(0);
+        // With ρ = 0 nothing is reflected: u_n = E at the nodes.
+        assert_eq!((e.reflected_scale, e.max_rel_reflected()), (0.0, None));
         let mut by_degree = [0usize; 4];
         for k in 0..mesh.len() {
             let truth = (0..=LATTICE)
