@@ -209,29 +209,26 @@ impl Radiosity {
         target: f64,
         backend: &dyn AssemblyBackend,
     ) -> Result<&Refinement, Error> {
-        let (opts, fresh) = match &self.adapt {
-            Some((opts, _)) => (
-                AdaptOptions {
+        let (opts, resume) = match &self.adapt {
+            Some((opts, resume)) => {
+                let opts = AdaptOptions {
                     target,
                     ..opts.clone()
-                },
-                None,
-            ),
+                };
+                (opts, resume.clone())
+            }
             None => {
                 let opts = AdaptOptions {
                     target,
-                    graded_start: false,
                     ..AdaptOptions::default()
                 };
                 let fresh = Resume::fresh(&self.outcome, &self.config, &opts, backend)?;
-                (opts, Some(fresh))
+                (opts, fresh)
             }
         };
-        let resume = fresh.as_ref().or(self.adapt.as_ref().map(|a| &a.1));
-        let resume = resume.expect("a loop's state or a fresh one");
-        let from = (&self.outcome, self.channels());
-        let (p, c) = (&self.problem, &self.config);
-        let resumed = resume_adaptive(p, c, &opts, backend, from.0, from.1, resume, |_| {})?;
+        let (p, c, from) = (&self.problem, &self.config, &self.outcome);
+        let channels = self.channels();
+        let resumed = resume_adaptive(p, c, &opts, backend, from, channels, &resume, |_| {})?;
         let refinement = self.refinement.get_or_insert(Refinement {
             steps: Vec::new(),
             stop: StopReason::Reached,
@@ -239,8 +236,7 @@ impl Radiosity {
         match resumed {
             Resumed::Stands { stop, .. } => {
                 refinement.stop = stop;
-                let resume = fresh.or(self.adapt.take().map(|a| a.1));
-                self.adapt = resume.map(|r| (opts, r));
+                self.adapt = Some((opts, resume));
             }
             Resumed::Refined(res) => {
                 let res = *res;
