@@ -623,3 +623,25 @@ fn the_written_image_reads_back() {
         .unwrap();
     assert_eq!(&exr[..4], &[0x76, 0x2f, 0x31, 0x01]);
 }
+
+/// A solve without a target refines too: the loop starts on its mesh (one
+/// degree everywhere, no history) and stops below the target away from
+/// the points it names, on a larger mesh.
+#[test]
+fn a_solve_without_a_target_refines_from_its_mesh() {
+    let mut solved = refined();
+    assert!(solved.refinement().is_none());
+    let unknowns = solved.outcome().discretization.len();
+    let first = solved.outcome().channels.iter();
+    let estimate = first.map(|c| c.estimate.as_ref().unwrap().shown_max_rel());
+    let target = 0.5 * estimate.fold(0.0, f64::max);
+    let refinement = solved.refine(target).expect("refines").clone();
+    let last = refinement.steps.last().expect("a step");
+    match refinement.stop {
+        StopReason::Reached => assert!(last.estimate_shown <= target),
+        StopReason::Singular => assert!(last.estimate_elsewhere <= target),
+        other => panic!("stopped: {other}"),
+    }
+    assert!(solved.outcome().discretization.len() > unknowns);
+    assert_eq!(last.unknowns, solved.outcome().discretization.len());
+}
