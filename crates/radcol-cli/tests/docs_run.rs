@@ -45,13 +45,7 @@ fn every_command_in_the_docs_runs() {
     let root = shown::root();
     let mut failures = Vec::new();
     let mut ran = 0;
-    for page in shown::pages() {
-        let text = std::fs::read_to_string(&page).expect("readable page");
-        let name = page
-            .strip_prefix(&root)
-            .unwrap_or(&page)
-            .display()
-            .to_string();
+    for (name, text) in shown::read_pages() {
         for command in shown::runnable(&text) {
             if shown::has_placeholder(&command) {
                 continue;

@@ -4,7 +4,9 @@
 //! (`SCENE`, `[--flag]`, `a|b`, `…`) are left out; the test counts both.
 
 use super::docs_shown::scene_file;
-use super::docs_shown::{commands, has_placeholder, package_dir, pages, root, runnable, words};
+use super::docs_shown::{
+    commands, has_placeholder, package_dir, read_pages, root, runnable, words,
+};
 use crate::args::Cli;
 use clap::Parser;
 use std::path::Path;
@@ -13,13 +15,7 @@ use std::path::Path;
 fn every_command_in_the_docs_is_accepted() {
     let (mut checked, mut skipped) = (0, 0);
     let mut failures = Vec::new();
-    for page in pages() {
-        let text = std::fs::read_to_string(&page).expect("readable page");
-        let shown = page
-            .strip_prefix(root())
-            .unwrap_or(&page)
-            .display()
-            .to_string();
+    for (shown, text) in read_pages() {
         for command in runnable(&text) {
             if has_placeholder(&command) {
                 skipped += 1;
@@ -86,13 +82,7 @@ fn commands_are_found_in_blocks_and_spans_and_placeholders_are_told() {
 fn every_example_and_bench_in_the_docs_exists() {
     let mut checked = 0;
     let mut failures = Vec::new();
-    for page in pages() {
-        let text = std::fs::read_to_string(&page).expect("readable page");
-        let shown = page
-            .strip_prefix(root())
-            .unwrap_or(&page)
-            .display()
-            .to_string();
+    for (shown, text) in read_pages() {
         for line in text.lines().flat_map(|l| l.split('`')) {
             let words: Vec<&str> = line.split_whitespace().collect();
             let Some(at) = words.iter().position(|w| *w == "cargo") else {

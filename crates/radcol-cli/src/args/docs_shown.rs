@@ -27,6 +27,22 @@ pub fn pages() -> Vec<PathBuf> {
     pages
 }
 
+/// Every page of [`pages`], named from the repository's root, with its text.
+pub fn read_pages() -> Vec<(String, String)> {
+    pages()
+        .into_iter()
+        .map(|page| {
+            let text = std::fs::read_to_string(&page).expect("readable page");
+            let name = page
+                .strip_prefix(root())
+                .unwrap_or(&page)
+                .display()
+                .to_string();
+            (name, text)
+        })
+        .collect()
+}
+
 /// The `radcol …` commands of `text`: lines of code blocks (fenced or
 /// indented) and inline code spans, with `cargo run --release [-p
 /// radcol-cli] --` read as `radcol`.

@@ -359,6 +359,16 @@ fn four_points() -> Vec<QueryPoint> {
     .to_vec()
 }
 
+/// u_n and û_n at `points` are `before`'s, bit for bit.
+fn assert_unchanged(solved: &Radiosity, points: &[QueryPoint], before: &[PointValues]) {
+    let after = solved.query(points).unwrap();
+    for (p, q) in before.iter().zip(&after) {
+        for (x, y) in p.channels.iter().zip(&q.channels) {
+            assert_eq!((x.u, x.iterated), (y.u, y.iterated));
+        }
+    }
+}
+
 /// Refining a solve to a smaller target continues its loop: new steps on
 /// a larger mesh, the estimate at the stop below the new target (away from
 /// the points it names), and values that agree, within the two estimates,
@@ -412,12 +422,7 @@ fn refining_to_a_target_already_met_changes_nothing() {
         (steps, StopReason::Reached)
     );
     assert_eq!(solved.outcome().discretization.len(), unknowns);
-    let after = solved.query(&points).unwrap();
-    for (p, q) in before.iter().zip(&after) {
-        for (x, y) in p.channels.iter().zip(&q.channels) {
-            assert_eq!((x.u, x.iterated), (y.u, y.iterated));
-        }
-    }
+    assert_unchanged(&solved, &points, &before);
 }
 
 /// After a relight, refining solves the current lights on the current
@@ -481,12 +486,7 @@ fn a_cancelled_refine_changes_nothing() {
     );
     assert_eq!(solved.outcome().discretization.len(), unknowns);
     assert_eq!(solved.refinement().unwrap().steps.len(), steps);
-    let after = solved.query(&points).unwrap();
-    for (p, q) in before.iter().zip(&after) {
-        for (x, y) in p.channels.iter().zip(&q.channels) {
-            assert_eq!((x.u, x.iterated), (y.u, y.iterated));
-        }
-    }
+    assert_unchanged(&solved, &points, &before);
 }
 
 /// The lightmap follows the current lights (linear in E: twice the light,
