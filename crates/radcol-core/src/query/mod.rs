@@ -237,6 +237,24 @@ impl PointEvaluator {
 /// `points`, with `problem`'s ρ and E and the quadrature options `opts`
 /// (the solve's); points are taken onto S within `snap` times the scene's
 /// diagonal. Points are answered in parallel.
+///
+/// ```
+/// use radcol_core::backend::CpuBackend;
+/// use radcol_core::query::{query, QueryPoint, DEFAULT_SNAP};
+/// use radcol_core::run::{shapes::sphere, solve, Field, Problem, SolveConfig};
+/// use std::sync::Arc;
+///
+/// // On the unit sphere G ≡ 1/4: with ρ = 0.5 and E = 1, u ≡ 2 everywhere,
+/// // between the nodes too.
+/// let problem = Problem::new(Arc::new(sphere(1.0)), Field::Constant(0.5), Field::Constant(1.0));
+/// let config = SolveConfig { degree: 1, level: 1, ..Default::default() };
+/// let outcome = solve(&problem, &config, &CpuBackend)?;
+/// let p = glam::DVec3::new(0.6, 0.0, 0.8);
+/// let values = query(&problem, &outcome, config.quad.clone(), &[QueryPoint::at(p)], DEFAULT_SNAP)?;
+/// let red = &values[0].channels[0];
+/// assert!((red.u - 2.0).abs() < 1e-9 && (red.iterated - 2.0).abs() < 1e-9);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn query(
     problem: &Problem,
     outcome: &SolveOutcome,

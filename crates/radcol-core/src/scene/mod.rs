@@ -261,7 +261,21 @@ pub enum SceneError {
     },
 }
 
-/// A triangle scene with materials, ready to solve.
+/// A triangle scene with materials, ready to solve: read from an OBJ or
+/// glTF file, built from one's own buffers ([`SceneBuilder`]), or one of
+/// the built-ins.
+///
+/// ```
+/// use radcol_core::scene::Scene;
+///
+/// let cornell = Scene::builtin("cornell")?;
+/// let light = cornell.materials.iter().find(|m| m.is_emitter()).expect("a light");
+/// assert_eq!(light.name, "light");
+/// assert!(cornell.triangle_count() > 30);
+/// let problem = cornell.problem(); // one channel per colour, R, G, B
+/// assert_eq!(problem.channels.len(), 3);
+/// # Ok::<(), radcol_core::scene::SceneError>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct Scene {
     /// Scene name (file stem or built-in name).
