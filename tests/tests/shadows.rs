@@ -402,3 +402,52 @@ fn to_1e_4_on_the_shadow_family() {
         }
     }
 }
+
+/// A target relative to the reflected light (max over the nodes of
+/// u_n − E: here the floor's light, about half the emitter's): the loop
+/// reaches it, the true max error over the whole surface (Lambert's
+/// formula, sampled on every element's lattice) is below it relative to
+/// the floor's light, and the estimate follows it.
+#[test]
+fn a_target_relative_to_the_reflected_light_is_reached_on_the_floor() {
+    use radcol_core::estimate::RelativeTo;
+    let case = &cases()[0];
+    let p = problem(case);
+    let cfg = SolveConfig {
+        degree: 1,
+        alpha: auto_alpha(1),
+        level: 1,
+        ..Default::default()
+    };
+    let target = 3e-3;
+    let opts = AdaptOptions {
+        target,
+        relative_to: RelativeTo::Reflected,
+        ..Default::default()
+    };
+    let t = std::time::Instant::now();
+    let res = solve_adaptive(&p, &cfg, &opts, &CpuBackend, |_| {}).expect("solves");
+    let last = res.steps.last().unwrap();
+    let e = res.outcome.channels[0].estimate.as_ref().unwrap();
+    let true_err = last.true_error.unwrap();
+    println!(
+        "{}: {:?} after {} steps, {:.1} s, {} unknowns; reflected scale {:.4} of max|u| {:.4}; \
+         estimate {:.3e}, true {true_err:.3e} of the reflected light",
+        case.name,
+        res.stop,
+        res.steps.len(),
+        t.elapsed().as_secs_f64(),
+        last.unknowns,
+        e.reflected_scale,
+        e.scale,
+        last.estimate
+    );
+    assert_eq!(res.stop, StopReason::Reached);
+    assert!(
+        e.reflected_scale < 0.6 * e.scale,
+        "the floor is the dimmer scale"
+    );
+    assert!(true_err <= target, "true error {true_err:.3e}");
+    let eff = last.estimate / true_err;
+    assert!((0.3..=3.0).contains(&eff), "effectivity {eff:.3}");
+}

@@ -1,6 +1,6 @@
 //! `radcol solve`'s own arguments (the problem's are [`super::ProblemArgs`]).
 
-use super::{ProblemArgs, TonemapArg, VerticesArg};
+use super::{ProblemArgs, RelativeToArg, TonemapArg, VerticesArg};
 use clap::Args;
 use radcol_core::prelude::DEFAULT_SNAP;
 use radcol_core::render::{lightmap::DEFAULT_LIGHTMAP_SIZE, RenderOptions};
@@ -46,6 +46,17 @@ or with --target-error its own triangles]"))]
         allow_hyphen_values = true
     )]
     pub target_error: Option<f64>,
+
+    /// With --target-error: what TOL is relative to: max |u| (in a lit scene, the light
+    /// itself) or the light the surfaces reflect (docs/accuracy.md).
+    #[arg(
+        help_heading = "Accuracy",
+        long,
+        value_enum,
+        requires = "target_error",
+        default_value_t = RelativeToArg::MaxU
+    )]
+    pub relative_to: RelativeToArg,
 
     /// With --target-error: never solve with more unknowns than N [default: what the
     /// dense matrix's memory allows].

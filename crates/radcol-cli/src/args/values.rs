@@ -2,6 +2,15 @@
 
 use clap::ValueEnum;
 
+/// What a target error is relative to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum RelativeToArg {
+    /// max |u|: in a lit scene, the light itself.
+    MaxU,
+    /// The light the surfaces reflect, max over the nodes of u − E.
+    Reflected,
+}
+
 /// Which linear solver.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum SolverArg {

@@ -3,7 +3,7 @@
 use super::{sci, secs};
 use radcol_core::run::{
     adapt::AdaptOptions, adapt::AdaptOutcome, adapt::AdaptStep, adapt::SingularPoint,
-    adapt::StopReason, OperatorKind,
+    adapt::StopReason, OperatorKind, RelativeTo,
 };
 use serde::Serialize;
 use std::fmt;
@@ -11,8 +11,11 @@ use std::fmt;
 /// The loop as run.
 #[derive(Clone, Debug, Serialize)]
 pub struct AdaptReport {
-    /// Target of the estimated max error relative to max |u|.
+    /// Target of the estimated max error relative to max |u|, or to the
+    /// reflected light (`relative_to`).
     target: f64,
+    /// What the target and the steps' figures are relative to.
+    relative_to: RelativeTo,
     /// The unknowns budget, when given.
     max_unknowns: Option<u64>,
     /// The degree, when the target chose it (`--degree` not given).
@@ -36,6 +39,7 @@ impl AdaptReport {
     pub fn new(opts: &AdaptOptions, res: &AdaptOutcome, default_degree: Option<usize>) -> Self {
         Self {
             target: opts.target,
+            relative_to: opts.relative_to,
             max_unknowns: opts.max_unknowns,
             default_degree,
             reached_estimate: res.steps.last().map_or(f64::NAN, |s| s.estimate_shown),
@@ -72,8 +76,12 @@ impl AdaptReport {
             StopReason::MaxUnknowns => " (--max-unknowns)",
             _ => "",
         };
+        let of = match self.relative_to {
+            RelativeTo::MaxU => "",
+            RelativeTo::Reflected => " of the reflected light",
+        };
         format!(
-            "estimated error {}{elsewhere} against the target {} after {} steps: {}{flag}",
+            "estimated error {}{elsewhere} against the target {}{of} after {} steps: {}{flag}",
             sci(self.reached_estimate),
             sci(self.target),
             self.steps.len(),

@@ -12,13 +12,13 @@ pub use outputs::{LookSpec, Output, OutputFile, OutputKind};
 pub use points::PointsSpec;
 use radcol_core::run::{
     adapt::AdaptOptions, adapt::MIN_TARGET, check_degree, Field, GmresParams, Grade, HOptions,
-    OperatorChoice, QuadratureOptions, SolveConfig, SolverKind, VisibilityMode, ADAPTIVE_DEGREE,
-    DEFAULT_DEGREE, MIN_QUAD_TOL,
+    OperatorChoice, QuadratureOptions, RelativeTo, SolveConfig, SolverKind, VisibilityMode,
+    ADAPTIVE_DEGREE, DEFAULT_DEGREE, MIN_QUAD_TOL,
 };
 
 use crate::args::{
     BackendArg, Cli, Command, InfoArgs, NodesArgs, OperatorArg, PrecisionArg, ProblemArgs,
-    SolveArgs, SolverArg, StudyArgs, VisibilityArg,
+    RelativeToArg, SolveArgs, SolverArg, StudyArgs, VisibilityArg,
 };
 use crate::error::{bad_input, BadInput};
 use crate::scene::SceneSpec;
@@ -220,6 +220,10 @@ fn solve_job(a: SolveArgs) -> Result<SolveJob> {
         .transpose()?
         .map(|o| AdaptOptions {
             graded_start: a.problem.degree.is_none(),
+            relative_to: match a.relative_to {
+                RelativeToArg::MaxU => RelativeTo::MaxU,
+                RelativeToArg::Reflected => RelativeTo::Reflected,
+            },
             ..o
         });
     if adapt.is_some() && !a.relight.is_empty() {

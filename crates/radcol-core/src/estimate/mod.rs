@@ -110,6 +110,20 @@ pub fn check_discretization(disc: &Discretization) -> Discretization {
         .expect("a check set of every degree used")
 }
 
+/// What the relative figures of an estimate, and an adaptive target, are
+/// relative to.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RelativeTo {
+    /// max |u_n|: in a lit scene, the emitters' own radiosity.
+    #[default]
+    MaxU,
+    /// The reflected light, max over the nodes of u_n − E
+    /// ([`ErrorEstimate::reflected_scale`]): what a viewer sees on lit
+    /// surfaces. Where nothing is reflected, max |u_n|.
+    Reflected,
+}
+
 /// The estimate of one channel's solution.
 #[derive(Clone, Debug, Serialize)]
 pub struct ErrorEstimate {
@@ -190,6 +204,23 @@ impl ErrorEstimate {
         self.max += bound;
         let s = if self.scale > 0.0 { self.scale } else { 1.0 };
         self.max_rel = self.max / s;
+    }
+
+    /// The scale that figures relative `to` divide by.
+    pub fn scale_of(&self, to: RelativeTo) -> f64 {
+        match to {
+            RelativeTo::Reflected if self.reflected_scale > 0.0 => self.reflected_scale,
+            _ => self.scale,
+        }
+    }
+
+    /// The factor that turns a figure relative to `scale` into one
+    /// relative `to` (1 when either scale is 0).
+    pub fn rescale(&self, to: RelativeTo) -> f64 {
+        match self.scale_of(to) {
+            s if s > 0.0 && self.scale > 0.0 => self.scale / s,
+            _ => 1.0,
+        }
     }
 
     /// `max` relative to the reflected light (`reflected_scale`); None when

@@ -34,7 +34,7 @@ pub use crate::assembly::{
 };
 pub use crate::discretization::Discretization;
 pub use crate::error::{Error, FieldKind, FieldName, InputError};
-pub use crate::estimate::ErrorEstimate;
+pub use crate::estimate::{ErrorEstimate, RelativeTo};
 pub use crate::geometry::{shapes, Surface};
 pub use crate::hmatrix::radiosity::predict as predict_compressed_from_geometry;
 pub use crate::hmatrix::{HOptions, HPrediction, HStats, SampledSize};

@@ -6,6 +6,7 @@
 use super::budget::budget;
 use super::history::{singular_points, History, SingularPoint};
 use super::{longest_edge, AdaptOptions, AdaptStep, StopReason};
+use crate::estimate::RelativeTo;
 use crate::run::{SolveConfig, SolveOutcome};
 
 /// What a solve tells the loop: the step as reported, whether to stop,
@@ -29,7 +30,7 @@ pub(super) fn assess(
     (cfg, opts, floor): (&SolveConfig, &AdaptOptions, f64),
     step_no: usize,
 ) -> Assessment {
-    let (indicator, negative) = indicators(out);
+    let (indicator, negative) = indicators(out, opts.relative_to);
     let stalls = history.stalls(&indicator);
     let smallest = |k: usize| longest_edge(out.discretization.mesh(), k) < floor;
     let frozen = |k: usize| smallest(k) || History::stalled(k, &stalls, opts.stall_generations);
@@ -130,7 +131,8 @@ fn describe(
     frozen: &dyn Fn(usize) -> bool,
     opts: &AdaptOptions,
 ) -> AdaptStep {
-    let (estimate, estimate_rms, estimate_shown) = worst(out);
+    let to = opts.relative_to;
+    let (estimate, estimate_rms, estimate_shown) = worst(out, to);
     let threshold = opts.mark_fraction * opts.target;
     AdaptStep {
         elements: indicator.len(),
@@ -139,7 +141,7 @@ fn describe(
         estimate_shown,
         estimate_rms,
         true_error: out.channels.first().and_then(|c| {
-            let scale = c.estimate.as_ref().map_or(1.0, |x| x.scale);
+            let scale = c.estimate.as_ref().map_or(1.0, |x| x.scale_of(to));
             c.errors.map(|e| e.global_max / scale)
         }),
         split: 0,
@@ -149,13 +151,16 @@ fn describe(
             .count(),
         // Approximate visibility's bound holds at every point, the
         // splittable elements' included.
-        estimate_elsewhere: splittable_max(indicator, frozen) + visibility_bound(out),
+        estimate_elsewhere: splittable_max(indicator, frozen) + visibility_bound(out, to),
         seconds: 0.0,
         estimate_updated_within: out
             .channels
             .iter()
             .filter_map(|c| c.estimate.as_ref())
-            .filter_map(|e| e.updated_within.map(|b| b / e.scale.max(f64::MIN_POSITIVE)))
+            .filter_map(|e| {
+                e.updated_within
+                    .map(|b| b / e.scale_of(to).max(f64::MIN_POSITIVE))
+            })
             .reduce(f64::max),
         timings: out.timings,
         operator: out.operator.kind(),
@@ -163,15 +168,17 @@ fn describe(
     }
 }
 
-/// Per element, the worst channel's estimate relative to its max |u_n|, and
-/// whether some channel has unphysical negative values on it.
-fn indicators(out: &SolveOutcome) -> (Vec<f64>, Vec<bool>) {
+/// Per element, the worst channel's estimate relative `to` its max |u_n|
+/// or its reflected light, and whether some channel has unphysical
+/// negative values on it.
+fn indicators(out: &SolveOutcome, to: RelativeTo) -> (Vec<f64>, Vec<bool>) {
     let n = out.discretization.mesh().len();
     let mut ind = vec![0.0f64; n];
     let mut negative = vec![false; n];
     for e in out.channels.iter().filter_map(|c| c.estimate.as_ref()) {
+        let f = e.rescale(to);
         for (i, v) in ind.iter_mut().zip(e.elements_rel()) {
-            *i = i.max(v);
+            *i = i.max(v * f);
         }
         for (a, &b) in negative.iter_mut().zip(&e.negative) {
             *a |= b;
@@ -180,23 +187,25 @@ fn indicators(out: &SolveOutcome) -> (Vec<f64>, Vec<bool>) {
     (ind, negative)
 }
 
-/// The worst channel's relative max and rms estimates of u_n, and its
-/// relative max estimate of what is shown.
-fn worst(out: &SolveOutcome) -> (f64, f64, f64) {
+/// The worst channel's max and rms estimates of u_n, and its max estimate
+/// of what is shown, relative `to`.
+fn worst(out: &SolveOutcome, to: RelativeTo) -> (f64, f64, f64) {
     out.channels
         .iter()
         .filter_map(|c| c.estimate.as_ref())
         .fold((0.0f64, 0.0f64, 0.0f64), |(m, r, s), e| {
-            (m.max(e.max_rel), r.max(e.rms_rel), s.max(e.shown_max_rel()))
+            let f = e.rescale(to);
+            let (max, rms, shown) = (e.max_rel * f, e.rms_rel * f, e.shown_max_rel() * f);
+            (m.max(max), r.max(rms), s.max(shown))
         })
 }
 
-/// The worst channel's bound of approximate visibility relative to its
-/// max |u_n| (0 when every pair is exact).
-fn visibility_bound(out: &SolveOutcome) -> f64 {
+/// The worst channel's bound of approximate visibility, relative `to` (0
+/// when every pair is exact).
+fn visibility_bound(out: &SolveOutcome, to: RelativeTo) -> f64 {
     let channels = out.channels.iter().filter_map(|c| c.estimate.as_ref());
     channels.fold(0.0, |m, e| {
-        m.max(e.visibility_bound / e.scale.max(f64::MIN_POSITIVE))
+        m.max(e.visibility_bound / e.scale_of(to).max(f64::MIN_POSITIVE))
     })
 }
 

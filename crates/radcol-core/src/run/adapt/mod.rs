@@ -39,6 +39,7 @@ use super::pipeline::{solve_step, PerElement, Plans, Previous};
 use super::{discretize, visibility_budget_for, OperatorKind, SolveConfig, SolveOutcome, Timings};
 use crate::assembly::{AssemblyBackend, Unchanged};
 use crate::error::{Error, InputError};
+use crate::estimate::RelativeTo;
 use crate::mesh::Mesh;
 use crate::problem::Problem;
 use assess::{assess, Assessment};
@@ -301,7 +302,13 @@ fn solve_or_stand(
             outcome,
             plans,
             unchanged: unchanged.clone(),
-            estimate_within: opts.estimate_within * opts.mark_fraction * opts.target,
+            // The update's tolerance is relative to max |u_n|: a target
+            // relative to the reflected light is the smaller, by the
+            // smallest ratio of the channels' scales.
+            estimate_within: opts.estimate_within
+                * opts.mark_fraction
+                * opts.target
+                * to_max_u(outcome, opts.relative_to),
         });
     let step = (mesh, per_element);
     match solve_step(problem, cfg, step, backend, guess, prev.as_ref()) {
@@ -309,6 +316,13 @@ fn solve_or_stand(
         Err(Error::Input(e)) if e.is_peak_refusal() && previous.is_some() => Ok(None),
         Err(e) => Err(e),
     }
+}
+
+/// What a figure relative `to` is relative to max |u_n| in `out`: the
+/// smallest ratio of the channels' scales (1 for max |u_n| itself).
+fn to_max_u(out: &SolveOutcome, to: RelativeTo) -> f64 {
+    let channels = out.channels.iter().filter_map(|c| c.estimate.as_ref());
+    channels.fold(1.0, |m, e| m.min(1.0 / e.rescale(to)))
 }
 
 /// The diagonal of the bounding box of `mesh`'s surface.

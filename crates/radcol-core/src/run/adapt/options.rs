@@ -1,13 +1,15 @@
 //! What the adaptive loop aims for and may spend, and the defaults.
 
 use crate::error::InputError;
+use crate::estimate::RelativeTo;
 use serde::Serialize;
 
 /// What the adaptive loop aims for and may spend.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct AdaptOptions {
-    /// Target of the estimated max error relative to max |u_n|, per
-    /// channel, in (0, 1).
+    /// Target of the estimated max error relative to max |u_n| (or, with
+    /// [`AdaptOptions::relative_to`], to the reflected light), per channel,
+    /// in (0, 1).
     pub target: f64,
     /// No step with more unknowns than this (None: as many as the dense
     /// matrix's memory allows).
@@ -64,6 +66,10 @@ pub struct AdaptOptions {
     /// the configured degree, as a study of one degree needs. CPU backend
     /// only; with another backend the start is not graded.
     pub graded_start: bool,
+    /// What `target` (and every relative figure of the steps) is relative
+    /// to: max |u_n| (the default; in a lit scene, the light itself) or the
+    /// reflected light, max over the nodes of u_n − E.
+    pub relative_to: RelativeTo,
 }
 
 /// The smallest target accepted: the estimate's integrals are accurate to
@@ -108,6 +114,7 @@ impl Default for AdaptOptions {
             estimate_within: ESTIMATE_WITHIN,
             hp: false,
             graded_start: true,
+            relative_to: RelativeTo::MaxU,
         }
     }
 }
