@@ -45,6 +45,7 @@ pub use crate::solution::Solution;
 /// that a program needs no glam dependency of its own.
 pub use glam::{self, DVec3};
 
+pub use crate::estimate::RelativeTo;
 pub use crate::progress::Cancel;
 pub use crate::radiosity::{CornerValues, Error, Radiosity, Refinement, Settings};
 #[cfg(feature = "export")]

@@ -40,6 +40,7 @@ use crate::alpha0::auto_alpha;
 use crate::assembly::{AssemblyBackend, CpuBackend};
 use crate::camera::Camera;
 use crate::error::InputError;
+use crate::estimate::RelativeTo;
 use crate::problem::Problem;
 use crate::progress::ProgressHandle;
 use crate::query::{PointEvaluator, PointValues, QueryPoint, DEFAULT_SNAP};
@@ -66,6 +67,10 @@ pub struct Settings {
     /// Progress observer; cancel the solve through it
     /// ([`crate::progress::Cancel`]).
     pub progress: Option<ProgressHandle>,
+    /// What `target_error` is relative to: max |u| (the default, as the
+    /// command's; in a lit scene the light itself) or the light the
+    /// surfaces reflect.
+    pub relative_to: RelativeTo,
 }
 
 impl Settings {
@@ -92,6 +97,7 @@ impl Settings {
         let adapt = self.target_error.map(|target| AdaptOptions {
             target,
             graded_start: self.degree.is_none(),
+            relative_to: self.relative_to,
             ..AdaptOptions::default()
         });
         let mut config = scene.solve_config(adapt.is_some());

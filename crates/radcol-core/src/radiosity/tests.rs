@@ -59,7 +59,7 @@ fn the_default_settings_are_the_commands() {
     let (config, adapt) = Settings {
         target_error: Some(1e-2),
         degree: Some(3),
-        progress: None,
+        ..Settings::default()
     }
     .configure(&scene);
     assert!(!adapt.unwrap().graded_start);
