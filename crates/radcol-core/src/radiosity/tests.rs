@@ -80,17 +80,7 @@ fn relit_values_are_queried_like_the_first() {
         .find(|m| m.name == name)
         .unwrap()
         .emission;
-    let points: Vec<QueryPoint> = [
-        DVec3::new(276.72, 0.0, 61.3),
-        DVec3::new(520.02, 0.0, 501.11),
-        DVec3::new(555.42, 448.64, 303.1),
-        DVec3::new(279.28, 548.8, 62.04),
-    ]
-    .map(|position| QueryPoint {
-        position,
-        normal: None,
-    })
-    .to_vec();
+    let points = four_points();
     let first = solved.query(&points).unwrap();
     assert!(first
         .iter()
