@@ -131,6 +131,8 @@ pub struct Radiosity {
     /// The adaptive loop's options and where it stands; None without a
     /// target.
     adapt: Option<(AdaptOptions, Resume)>,
+    /// What a target is relative to when refining a solve that had none.
+    relative_to: RelativeTo,
     /// The channels after [`Radiosity::relight`]; None: the solve's.
     relit: Option<Vec<ChannelResult>>,
     evaluator: OnceLock<PointEvaluator>,
@@ -155,7 +157,11 @@ impl Radiosity {
         backend: &dyn AssemblyBackend,
     ) -> Result<Self, Error> {
         let (config, adapt) = settings.configure(&scene);
-        Self::solve_with(scene, config, adapt.as_ref(), backend)
+        let solved = Self::solve_with(scene, config, adapt.as_ref(), backend)?;
+        Ok(Self {
+            relative_to: settings.relative_to,
+            ..solved
+        })
     }
 
     /// Solves `scene` with a configuration of one's own (every setting of
@@ -170,6 +176,7 @@ impl Radiosity {
         if !problem.emits() {
             return Err(InputError::NoEmission.into());
         }
+        let relative_to = adapt.map_or(RelativeTo::MaxU, |a| a.relative_to);
         let (outcome, refinement, adapt) = match adapt {
             None => (solve(&problem, &config, backend)?, None, None),
             Some(opts) => {
@@ -192,13 +199,14 @@ impl Radiosity {
             outcome,
             refinement,
             adapt,
+            relative_to,
             relit: None,
             evaluator: OnceLock::new(),
         })
     }
 
     /// Refines further, from the mesh solved on, until the estimate is
-    /// below `target` (relative to max |u|, as [`Settings::target_error`])
+    /// below `target` (relative as the solve's [`Settings::relative_to`], to max |u| by default)
     /// or a budget stops it, as the adaptive loop would have gone on: its
     /// new steps are appended to [`Radiosity::refinement`]. The first
     /// split is decided by the estimate at hand; after a relight, or
@@ -226,6 +234,7 @@ impl Radiosity {
             None => {
                 let opts = AdaptOptions {
                     target,
+                    relative_to: self.relative_to,
                     ..AdaptOptions::default()
                 };
                 let fresh = Resume::fresh(&self.outcome, &self.config, &opts, backend)?;

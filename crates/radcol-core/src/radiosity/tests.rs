@@ -635,3 +635,29 @@ fn a_solve_without_a_target_refines_from_its_mesh() {
     assert!(solved.outcome().discretization.len() > unknowns);
     assert_eq!(last.unknowns, solved.outcome().discretization.len());
 }
+
+/// A solve without a target whose settings ask for targets relative to
+/// the reflected light refines relative to it: the last step's estimate is
+/// the worst channel's max over its reflected light, not over max |u|.
+#[test]
+fn a_refine_follows_the_settings_relative_to() {
+    let settings = Settings {
+        relative_to: RelativeTo::Reflected,
+        ..Settings::default()
+    };
+    let shadow = builtin("shadow").expect("built in").expect("loads");
+    let mut solved = Radiosity::solve(shadow, &settings).expect("solves");
+    let estimate = |s: &Radiosity| {
+        let channels = s.outcome().channels.iter();
+        channels.fold((0.0f64, 0.0f64), |(r, m), c| {
+            let e = c.estimate.as_ref().unwrap();
+            (r.max(e.max / e.reflected_scale), m.max(e.max_rel))
+        })
+    };
+    let (reflected, max_u) = estimate(&solved);
+    assert!(reflected > 2.0 * max_u, "{reflected} against {max_u}");
+    let refinement = solved.refine(0.9 * reflected).expect("refines").clone();
+    let last = refinement.steps.last().expect("a step");
+    let (reflected, _) = estimate(&solved);
+    assert!((last.estimate - reflected).abs() <= 1e-12 * reflected, "{} against {reflected}", last.estimate);
+}
