@@ -145,10 +145,12 @@ pub fn visible_region(
     }
     let tol = 1e-12 * occ.scale();
     if cands.len() <= MERGE_ABOVE {
-        let shadows = cands
+        let shadows: Vec<[Linear; 4]> = cands
             .iter()
-            .filter_map(|&i| shadow_of(p, v, occ.get(i), tol));
-        subtracted(front, shadows)
+            .filter_map(|&i| shadow_of(p, v, occ.get(i), tol))
+            .filter(|shadow| !misses(&front, shadow))
+            .collect();
+        subtracted(front, shadows.into_iter())
     } else {
         merged(front, p, v, occ, cands, tol)
     }
@@ -253,6 +255,17 @@ fn shadow_of(
     Some(shadow)
 }
 
+/// True when one of the shadow's half-planes leaves every vertex of the
+/// convex polygon `poly` clearly outside (by more than a rounding margin,
+/// so that pieces clipped from `poly` lie outside too): the shadow misses
+/// it, and subtracting it would only copy each piece.
+fn misses(poly: &[[f64; 2]], shadow: &[Linear; 4]) -> bool {
+    shadow.iter().any(|h| {
+        let margin = 1e-9 * (h.gs.abs() + h.gt.abs());
+        poly.iter().all(|&q| h.at(q) < -margin)
+    })
+}
+
 /// `front` less each shadow in turn: subtracting a convex shadow from a
 /// convex piece leaves at most four convex pieces (one outside each
 /// half-plane).
@@ -306,11 +319,14 @@ fn merged(
     use i_triangle::float::triangulatable::Triangulatable;
 
     let projector = Projector::new(p, v);
+    let (lo, hi) = bounding_box(&front);
     let mut cast: Vec<Polygon> = Vec::with_capacity(cands.len());
     for &i in cands {
         let t = occ.get(i);
         if let Some(tri) = projector.triangle(&t.v, tol) {
-            cast.push(tri);
+            if meets_box(&tri, lo, hi) {
+                cast.push(tri);
+            }
             continue;
         }
         let Some(shadow) = shadow_of(p, v, t, tol) else {
@@ -342,6 +358,28 @@ fn merged(
         .map(|t| vec![points[t[0]], points[t[1]], points[t[2]]])
         .filter(|t| area(t) > MIN_AREA)
         .collect()
+}
+
+/// The corners of the axis-aligned box around `poly`'s vertices.
+fn bounding_box(poly: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
+    poly.iter().fold(
+        ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+        |(lo, hi), q| {
+            (
+                [lo[0].min(q[0]), lo[1].min(q[1])],
+                [hi[0].max(q[0]), hi[1].max(q[1])],
+            )
+        },
+    )
+}
+
+/// False when the triangle `tri` lies wholly on one side of the box
+/// [`lo`, `hi`] (a separating axis of the two): its shadow misses the
+/// polygon in the box and changes nothing in the overlay but its size.
+fn meets_box(tri: &[[f64; 2]], lo: [f64; 2], hi: [f64; 2]) -> bool {
+    (0..2).all(|a| {
+        tri.iter().any(|q| q[a] >= lo[a]) && tri.iter().any(|q| q[a] <= hi[a])
+    })
 }
 
 /// Fan triangulation of a convex polygon, without the triangles whose
@@ -692,5 +730,66 @@ mod tests {
         let p = DVec3::new(0.0, 0.0, 2.0);
         let pieces = visible_region(p, -DVec3::Z, &v, &occ, &[0, 1]);
         crate::assert_close!(total(&pieces), 0.5, 1e-15);
+    }
+
+    /// A shadow that misses the element leaves it whole, in one piece: a
+    /// triangle beside the element, whose shadow's first half-planes cut
+    /// the element, used to split it into pieces that covered it (and
+    /// dropped the slivers below [`MIN_AREA`]). Beside it, one that does
+    /// meet the element still cuts it.
+    #[test]
+    fn a_shadow_that_misses_the_element_leaves_it_whole() {
+        let v = [
+            DVec3::new(0., 0., 0.),
+            DVec3::new(1., 0., 0.),
+            DVec3::new(0., 1., 0.),
+        ];
+        let p = DVec3::new(0.0, 0.0, 2.0);
+        // In the plane x = 0.5 + 2z, about z = 1: its shadow lies near
+        // x = 4.8, past the element, but its plane (the shadow's first
+        // half-plane) crosses σ along x = 0.5.
+        let beside = [
+            DVec3::new(2.3, -0.5, 0.9),
+            DVec3::new(2.7, -0.5, 1.1),
+            DVec3::new(2.5, 0.5, 1.0),
+        ];
+        // Over the element's corner at the origin.
+        let over = [
+            DVec3::new(-0.2, -0.2, 1.0),
+            DVec3::new(0.4, -0.2, 1.0),
+            DVec3::new(-0.2, 0.4, 1.0),
+        ];
+        let occ = Occluders::new(&[beside, over]);
+        let n = -DVec3::Z;
+        let sh = shadow_of(p, &v, occ.get(0), 1e-12).unwrap();
+        let sigma = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+        let side = sigma.map(|q| sh[0].at(q) > 0.0);
+        assert!(side.contains(&true) && side.contains(&false), "the case tests nothing");
+        assert!(misses(&sigma, &sh));
+        let whole = visible_region(p, n, &v, &occ, &[0]);
+        assert_eq!(whole.len(), 1, "{whole:?}");
+        crate::assert_close!(total(&whole), 0.5, 1e-15);
+        assert!(!misses(&sigma, &shadow_of(p, &v, occ.get(1), 1e-12).unwrap()));
+        let cut = total(&visible_region(p, n, &v, &occ, &[0, 1]));
+        // The triangle at z = 1, half way down from P, casts one twice its
+        // size, below x + y = 0.4: σ loses the triangle (0, 0), (0.4, 0),
+        // (0, 0.4), of area 0.08 in (x, y), which are (s, t) here.
+        crate::assert_close!(cut, 0.5 - 0.08, 1e-13, "{cut}");
+    }
+
+    /// The box test keeps every triangle that meets the box and drops those
+    /// wholly to one side of it.
+    #[test]
+    fn the_box_test_separates_by_the_axes() {
+        let (lo, hi) = ([0.0, 0.0], [1.0, 1.0]);
+        assert!(meets_box(&[[0.5, 0.5], [2.0, 0.5], [0.5, 2.0]], lo, hi));
+        assert!(meets_box(&[[-1.0, 0.5], [2.0, 0.4], [0.5, 0.6]], lo, hi));
+        // Its box overlaps, the triangle does not: kept (the test is
+        // conservative, the overlay decides).
+        assert!(meets_box(&[[1.5, 0.9], [0.9, 1.5], [1.5, 1.5]], lo, hi));
+        assert!(!meets_box(&[[-1.0, 0.5], [-0.1, 0.4], [-0.5, 0.6]], lo, hi));
+        assert!(!meets_box(&[[0.2, 1.1], [0.4, 1.5], [0.9, 3.0]], lo, hi));
+        assert!(!meets_box(&[[2.0, 0.1], [1.1, 0.5], [3.0, 0.2]], lo, hi));
+        assert!(!meets_box(&[[0.2, -1.1], [0.4, -0.5], [0.9, -3.0]], lo, hi));
     }
 }
