@@ -14,6 +14,7 @@ pub mod conformance;
 pub mod cpu;
 pub mod integrate;
 pub mod plan;
+pub mod point;
 
 pub use cpu::CpuBackend;
 pub use integrate::{
