@@ -32,6 +32,7 @@ mod relight;
 mod reuse;
 mod scenes;
 mod shadows;
+mod small_shadow;
 mod solvers_agree;
 mod sphere_orders;
 mod visibility;

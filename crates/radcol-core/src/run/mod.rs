@@ -20,6 +20,7 @@ mod inputs;
 pub mod operator;
 mod outcome;
 mod pipeline;
+mod probes;
 mod relight;
 mod size;
 

@@ -5,6 +5,7 @@ use super::operator::{
     build_compressed, decide_now, lighter_than_dense, predict_compressed, GeometricOperator,
     OperatorDecision, OperatorKind,
 };
+use super::probes;
 use super::relight::Relighter;
 use super::size::{available_memory, MemoryUse};
 use super::{ChannelResult, SolveConfig, SolveOutcome, Timings};
@@ -220,8 +221,13 @@ fn estimate_channels(
         ..cfg.quad.clone()
     };
     let reuse = previous.and_then(|p| p.plans.check.as_ref().map(|c| (c, p.unchanged.clone())));
-    let plan =
-        AssemblyPlan::at_points(disc.clone(), check, quad, visibility, (reuse, Some(square)));
+    let plan = AssemblyPlan::at_points(
+        disc.clone(),
+        check.clone(),
+        quad.clone(),
+        visibility,
+        (reuse, Some(square)),
+    );
     let inputs: Vec<ChannelFields<'_>> = channels
         .iter()
         .zip(&check_fields)
@@ -235,7 +241,16 @@ fn estimate_channels(
     let updated = previous
         .zip(guess)
         .and_then(|(p, g)| update(&plan, &inputs, p, g));
-    let estimates = updated.unwrap_or_else(|| estimate(&plan, &inputs));
+    let mut estimates = updated.unwrap_or_else(|| estimate(&plan, &inputs));
+    // Shadows of the direct light between an element's check points.
+    let found = probes::find(square, &check, &probes::emitting(disc, channels));
+    probes::apply(
+        &found,
+        (disc, &quad, visibility),
+        problem,
+        channels,
+        &mut estimates,
+    );
     // Approximate visibility: the most the residual at a node or check
     // point can have moved, per unit of ρ max|u| (0 when exact).
     let mass = (square.stats().visibility_bound).max(plan.stats().visibility_bound);

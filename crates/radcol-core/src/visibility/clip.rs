@@ -156,6 +156,56 @@ pub fn visible_region(
     }
 }
 
+/// The shadows that the occluders `cands` cast from the point `p` (unit
+/// normal `n_p`) on the part of the flat element `v` in front of it: one
+/// convex piece per occluder that casts one, in (s, t). Every point of a
+/// piece is hidden from `p`; the pieces of neighbouring occluders overlap
+/// or abut.
+pub fn shadow_pieces(
+    p: DVec3,
+    n_p: DVec3,
+    v: &[DVec3; 3],
+    occ: &Occluders,
+    cands: &[u32],
+) -> Vec<Polygon> {
+    let sigma: Polygon = vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+    let front = clip(&sigma, Linear::along(v, p, n_p));
+    if area(&front) <= MIN_AREA {
+        return Vec::new();
+    }
+    let tol = 1e-12 * occ.scale();
+    cands
+        .iter()
+        .filter_map(|&i| shadow_of(p, v, occ.get(i), tol))
+        .map(|shadow| shadow.iter().fold(front.clone(), |s, &h| clip(&s, h)))
+        .filter(|piece| area(piece) > MIN_AREA)
+        .collect()
+}
+
+/// The centroid of a polygon of nonzero area.
+pub fn centroid(poly: &[[f64; 2]]) -> [f64; 2] {
+    let (mut cx, mut cy, mut twice) = (0.0, 0.0, 0.0);
+    for i in 0..poly.len() {
+        let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
+        let w = p[0] * q[1] - q[0] * p[1];
+        cx += (p[0] + q[0]) * w;
+        cy += (p[1] + q[1]) * w;
+        twice += w;
+    }
+    [cx / (3.0 * twice), cy / (3.0 * twice)]
+}
+
+/// Whether the convex polygon `poly` (either orientation) holds `q`
+/// (its boundary included).
+pub fn contains(poly: &[[f64; 2]], q: [f64; 2]) -> bool {
+    let side = |i: usize| {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        (b[0] - a[0]) * (q[1] - a[1]) - (b[1] - a[1]) * (q[0] - a[0])
+    };
+    let n = poly.len();
+    (0..n).all(|i| side(i) >= 0.0) || (0..n).all(|i| side(i) <= 0.0)
+}
+
 /// Central projection from a point P onto the plane of an element, in the
 /// element's (s, t), of the points strictly between that plane and the
 /// plane through P parallel to it.
@@ -791,5 +841,53 @@ mod tests {
         assert!(!meets_box(&[[0.2, 1.1], [0.4, 1.5], [0.9, 3.0]], lo, hi));
         assert!(!meets_box(&[[2.0, 0.1], [1.1, 0.5], [3.0, 0.2]], lo, hi));
         assert!(!meets_box(&[[0.2, -1.1], [0.4, -0.5], [0.9, -3.0]], lo, hi));
+    }
+
+    /// The shadow pieces of a square blocker half way between a point and
+    /// a square element: one per blocker triangle and element triangle that
+    /// overlap, abutting, their union the central projection (closed form: the
+    /// square of twice the blocker's side, centred under the point), each
+    /// holding its own centroid.
+    #[test]
+    fn shadow_pieces_tile_the_projection() {
+        let sq = |h: f64, z: f64| {
+            let c = [
+                DVec3::new(-h, -h, z),
+                DVec3::new(h, -h, z),
+                DVec3::new(h, h, z),
+                DVec3::new(-h, h, z),
+            ];
+            [[c[0], c[1], c[2]], [c[0], c[2], c[3]]]
+        };
+        let occ = Occluders::new(&sq(0.25, 1.0));
+        let p = DVec3::new(0.0, 0.0, 2.0);
+        let (mut area_sum, mut moment, mut count) = (0.0, DVec3::ZERO, 0);
+        for el in sq(1.0, 0.0) {
+            for piece in shadow_pieces(p, -DVec3::Z, &el, &occ, &[0, 1]) {
+                let c = centroid(&piece);
+                assert!(contains(&piece, c), "{piece:?}");
+                let at = el[0] + (el[1] - el[0]) * c[0] + (el[2] - el[0]) * c[1];
+                // (s, t) area × 2 × element area (2 here) = physical area.
+                let a = area(&piece) * 4.0;
+                area_sum += a;
+                moment += at * a;
+                count += 1;
+            }
+        }
+        // Both squares split along the same diagonal: each blocker
+        // triangle shadows one element triangle (the other only along the
+        // diagonal).
+        assert_eq!(count, 2);
+        crate::assert_close!(area_sum, 1.0, 1e-13, "{area_sum}");
+        assert!(moment.length() < 1e-13, "{moment}");
+        // Beside the element: no piece.
+        let far = Occluders::new(&[[
+            DVec3::new(3.0, 3.0, 1.0),
+            DVec3::new(3.5, 3.0, 1.0),
+            DVec3::new(3.0, 3.5, 1.0),
+        ]]);
+        assert!(shadow_pieces(p, -DVec3::Z, &sq(1.0, 0.0)[0], &far, &[0]).is_empty());
+        assert!(!contains(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], [0.6, 0.6]));
+        assert!(contains(&[[0.0, 0.0], [0.0, 1.0], [1.0, 0.0]], [0.3, 0.3]));
     }
 }

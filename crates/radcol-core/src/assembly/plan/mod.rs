@@ -315,6 +315,18 @@ impl AssemblyPlan {
         &self.visibility
     }
 
+    /// The partly visible pairs of row block `kp` whose visible part is
+    /// clipped exactly (not approximated): each column element with its
+    /// candidate occluders.
+    pub(crate) fn clipped_pairs(&self, kp: usize) -> impl Iterator<Item = (usize, &[u32])> + '_ {
+        self.partial.get(kp).into_iter().flat_map(|row| {
+            (row.elements.iter())
+                .map(|&k| k as usize)
+                .filter(|&k| !row.is_approx(k))
+                .map(|k| (k, row.candidates_of(k)))
+        })
+    }
+
     /// The occluders, when the scene can occlude.
     pub fn occluders(&self) -> Option<&Occluders> {
         self.occluders.as_ref()

@@ -1,0 +1,155 @@
+//! Shadow probes of the error estimate: points inside a shadow of the
+//! direct light that falls on an element between its check points.
+//!
+//! The estimate samples the residual η = E + ρ K u_n − u_n at each
+//! element's check points. A small occluder can cast a shadow that falls
+//! wholly between them (an object far smaller than the floor triangle it
+//! stands on): η is large there, u_n being interpolated from nodes in the
+//! light, and neither the element's figure nor the maximum saw it, so an
+//! adaptive solve stopped with the shadow missing. Here, for every pair of
+//! an element with an emitting element whose visible part is clipped
+//! exactly, the shadows that the pair's candidate occluders cast from the
+//! emitting element's centroid are found on the element
+//! ([`clip::shadow_pieces`]). When none of them holds a check point, the
+//! largest pieces (not holding an earlier probe) get a probe at their
+//! centroid, where η is evaluated with the row of K at that point
+//! ([`PointEvaluator::row`]) and raises the element's figure and the
+//! maximum ([`ErrorEstimate::add_probe`]); the adaptive loop then splits
+//! the element until check points fall in the shadow, and does not take
+//! it for a singular point meanwhile.
+
+use super::ChannelResult;
+use crate::assembly::point::PointEvaluator;
+use crate::assembly::{AssemblyPlan, QuadratureOptions};
+use crate::discretization::Discretization;
+use crate::estimate::ErrorEstimate;
+use crate::mesh::Located;
+use crate::problem::Problem;
+use crate::visibility::{clip, VisibilityAnalysis};
+use rayon::prelude::*;
+use std::sync::Arc;
+
+/// At most so many probes per pair of an element and an emitting element,
+/// the largest pieces first.
+const PER_PAIR: usize = 2;
+
+/// At most so many probes per element.
+const PER_ELEMENT: usize = 8;
+
+/// A point where η is evaluated besides the check points.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Probe {
+    pub(crate) element: usize,
+    pub(crate) st: [f64; 2],
+}
+
+/// The probes of the elements of `square`'s discretization (the solve's
+/// plan), with `check` its check points and `emitting` which elements emit.
+pub(crate) fn find(square: &AssemblyPlan, check: &Discretization, emitting: &[bool]) -> Vec<Probe> {
+    let Some(occ) = square.occluders() else {
+        return Vec::new();
+    };
+    let mesh = square.discretization().mesh();
+    (0..mesh.len())
+        .into_par_iter()
+        .flat_map_iter(|b| {
+            let mut taken: Vec<[f64; 2]> = Vec::new();
+            if mesh.is_flat(b) {
+                let v = mesh.vertices(b);
+                let checks: Vec<[f64; 2]> = check.points()[check.range(b)]
+                    .iter()
+                    .map(|p| p.st)
+                    .collect();
+                for (c, cands) in square.clipped_pairs(b) {
+                    if !emitting[c] || cands.is_empty() || taken.len() >= PER_ELEMENT {
+                        continue;
+                    }
+                    let light = mesh.point(c, 1.0 / 3.0, 1.0 / 3.0);
+                    let mut pieces =
+                        clip::shadow_pieces(light.position, light.normal, &v, occ, cands);
+                    // A shadow that holds a check point is seen by the
+                    // check points already.
+                    let in_shadow = |q: &[f64; 2]| pieces.iter().any(|x| clip::contains(x, *q));
+                    if checks.iter().any(in_shadow) {
+                        continue;
+                    }
+                    pieces.sort_by(|x, y| clip::area(y).total_cmp(&clip::area(x)));
+                    let mut added = 0;
+                    for piece in &pieces {
+                        if added == PER_PAIR || taken.len() == PER_ELEMENT {
+                            break;
+                        }
+                        if !taken.iter().any(|q| clip::contains(piece, *q)) {
+                            taken.push(clip::centroid(piece));
+                            added += 1;
+                        }
+                    }
+                }
+            }
+            taken.into_iter().map(move |st| Probe { element: b, st })
+        })
+        .collect()
+}
+
+/// Evaluates η of every channel at `probes` and adds each to its channel's
+/// estimate.
+pub(crate) fn apply(
+    probes: &[Probe],
+    (disc, quad, visibility): (
+        &Arc<Discretization>,
+        &QuadratureOptions,
+        &VisibilityAnalysis,
+    ),
+    problem: &Problem,
+    channels: &[ChannelResult],
+    estimates: &mut [ErrorEstimate],
+) {
+    if probes.is_empty() {
+        return;
+    }
+    let eval = PointEvaluator::new(disc.clone(), quad.clone(), visibility);
+    let mesh = disc.mesh();
+    let etas: Vec<Vec<f64>> = probes
+        .par_iter()
+        .map(|pr| {
+            let ([s, t], k) = (pr.st, pr.element);
+            let point = mesh.point(k, s, t);
+            let at = Located {
+                element: k,
+                st: pr.st,
+                position: point.position,
+                normal: point.normal,
+                distance: 0.0,
+            };
+            let (row, _) = eval.row(&at);
+            let site = mesh.site(k, s, t);
+            channels
+                .iter()
+                .zip(&problem.channels)
+                .map(|(ch, fields)| {
+                    let nodal = ch.solution.nodal();
+                    let ku: f64 = row.iter().zip(nodal).map(|(a, b)| a * b).sum();
+                    let (rho, e) = (fields.rho.eval(&site), fields.emission.eval(&site));
+                    (e + rho * ku - ch.solution.eval(k, s, t)).abs()
+                })
+                .collect()
+        })
+        .collect();
+    for (pr, eta) in probes.iter().zip(etas) {
+        for (est, eta) in estimates.iter_mut().zip(eta) {
+            est.add_probe(pr.element, eta);
+        }
+    }
+}
+
+/// Which elements emit: E > 0 at one of their nodes in some channel.
+pub(crate) fn emitting(disc: &Discretization, channels: &[ChannelResult]) -> Vec<bool> {
+    (0..disc.mesh().len())
+        .map(|k| {
+            let r = disc.range(k);
+            channels
+                .iter()
+                .any(|ch| ch.emission[r.clone()].iter().any(|&e| e > 0.0))
+        })
+        .collect()
+}
