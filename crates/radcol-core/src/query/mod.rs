@@ -100,7 +100,8 @@ pub enum QueryError {
 }
 
 impl PointEvaluator {
-    /// Finds `q` on S within `reach` ([`Locator::nearest`]).
+    /// Finds `q` on S within `reach`: the nearest element (facing `q`'s
+    /// normal when it has one), through a BVH over the elements.
     pub fn locate(&self, q: &QueryPoint, reach: f64) -> Option<Located> {
         self.locator
             .nearest(self.disc.mesh(), q.position, q.normal, reach)

@@ -61,7 +61,7 @@ impl PointEvaluator {
         }
     }
 
-    /// The diagonal of the scene's bounding box (the unit of [`DEFAULT_SNAP`]).
+    /// The diagonal of the scene's bounding box (the unit of [`crate::query::DEFAULT_SNAP`]).
     pub fn diagonal(&self) -> f64 {
         self.diagonal
     }
