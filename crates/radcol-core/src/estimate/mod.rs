@@ -182,9 +182,6 @@ pub struct ErrorEstimate {
     /// raised that element's figure and `max` when larger
     /// ([`ErrorEstimate::add_probe`]; `l2` and `rms_rel` leave them out).
     pub probes: usize,
-    /// Per element: whether a probe raised its figure (empty: none did).
-    #[serde(skip)]
-    pub probed: Vec<bool>,
     /// ∫_S G V u_n / π at every check point (ordered like the check rows):
     /// û_n = E + ρ · this. What the next step's update starts from.
     #[serde(skip)]
@@ -219,23 +216,12 @@ impl ErrorEstimate {
     /// [`ErrorEstimate::add_visibility_bound`], which adds to `max`).
     pub fn add_probe(&mut self, k: usize, eta: f64) {
         self.probes += 1;
-        if eta > self.elements[k] {
-            self.elements[k] = eta;
-            self.probed.resize(self.elements.len(), false);
-            self.probed[k] = true;
-        }
+        self.elements[k] = self.elements[k].max(eta);
         if eta > self.max {
             self.max = eta;
             let s = if self.scale > 0.0 { self.scale } else { 1.0 };
             self.max_rel = self.max / s;
         }
-    }
-
-    /// Whether a probe raised element `k`'s figure: a shadow lies between
-    /// its check points, which splitting resolves (the adaptive loop does
-    /// not take it for a singular point).
-    pub fn probed(&self, k: usize) -> bool {
-        self.probed.get(k).copied().unwrap_or(false)
     }
 
     /// The scale that figures relative `to` divide by.
@@ -468,7 +454,6 @@ fn summarise(
         updated_within: None,
         visibility_bound: 0.0,
         probes: 0,
-        probed: Vec::new(),
         check_ku: Vec::new(),
         check_ku_drift: 0.0,
     }

@@ -15,8 +15,7 @@
 //! centroid, where η is evaluated with the row of K at that point
 //! ([`PointEvaluator::row`]) and raises the element's figure and the
 //! maximum ([`ErrorEstimate::add_probe`]); the adaptive loop then splits
-//! the element until check points fall in the shadow, and does not take
-//! it for a singular point meanwhile.
+//! the element until check points fall in the shadow.
 
 use super::ChannelResult;
 use crate::assembly::point::PointEvaluator;

@@ -479,25 +479,28 @@ mod tests {
         crate::assert_close!(total(&pieces), 0.375, 1e-15);
     }
 
+    /// The square [-h, h]² at height z as two triangles (split along the
+    /// diagonal through (-h, -h)), facing up.
+    fn square(h: f64, z: f64) -> [[DVec3; 3]; 2] {
+        let c = [
+            DVec3::new(-h, -h, z),
+            DVec3::new(h, -h, z),
+            DVec3::new(h, h, z),
+            DVec3::new(-h, h, z),
+        ];
+        [[c[0], c[1], c[2]], [c[0], c[2], c[3]]]
+    }
+
     /// A square occluder half way between P and the element hides a square of
     /// twice its side (central projection), in closed form.
     #[test]
     fn shadow_of_a_square_is_its_projection() {
         // Element: the square [-1,1]² at z = 0 as two triangles; P at z = 2
         // looking down; blocker [-0.25,0.25]² at z = 1 hides [-0.5,0.5]².
-        let sq = |h: f64, z: f64| {
-            let c = [
-                DVec3::new(-h, -h, z),
-                DVec3::new(h, -h, z),
-                DVec3::new(h, h, z),
-                DVec3::new(-h, h, z),
-            ];
-            [[c[0], c[1], c[2]], [c[0], c[2], c[3]]]
-        };
-        let occ = Occluders::new(&sq(0.25, 1.0));
+        let occ = Occluders::new(&square(0.25, 1.0));
         let p = DVec3::new(0.0, 0.0, 2.0);
         let mut hidden = 0.0;
-        for el in sq(1.0, 0.0) {
+        for el in square(1.0, 0.0) {
             let visible = total(&visible_region(p, -DVec3::Z, &el, &occ, &[0, 1]));
             // (s, t) area × 2 × element area (2 here) = physical area.
             hidden += (0.5 - visible) * 2.0 * 2.0;
@@ -850,19 +853,10 @@ mod tests {
     /// holding its own centroid.
     #[test]
     fn shadow_pieces_tile_the_projection() {
-        let sq = |h: f64, z: f64| {
-            let c = [
-                DVec3::new(-h, -h, z),
-                DVec3::new(h, -h, z),
-                DVec3::new(h, h, z),
-                DVec3::new(-h, h, z),
-            ];
-            [[c[0], c[1], c[2]], [c[0], c[2], c[3]]]
-        };
-        let occ = Occluders::new(&sq(0.25, 1.0));
+        let occ = Occluders::new(&square(0.25, 1.0));
         let p = DVec3::new(0.0, 0.0, 2.0);
         let (mut area_sum, mut moment, mut count) = (0.0, DVec3::ZERO, 0);
-        for el in sq(1.0, 0.0) {
+        for el in square(1.0, 0.0) {
             for piece in shadow_pieces(p, -DVec3::Z, &el, &occ, &[0, 1]) {
                 let c = centroid(&piece);
                 assert!(contains(&piece, c), "{piece:?}");
@@ -886,7 +880,7 @@ mod tests {
             DVec3::new(3.5, 3.0, 1.0),
             DVec3::new(3.0, 3.5, 1.0),
         ]]);
-        assert!(shadow_pieces(p, -DVec3::Z, &sq(1.0, 0.0)[0], &far, &[0]).is_empty());
+        assert!(shadow_pieces(p, -DVec3::Z, &square(1.0, 0.0)[0], &far, &[0]).is_empty());
         assert!(!contains(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], [0.6, 0.6]));
         assert!(contains(&[[0.0, 0.0], [0.0, 1.0], [1.0, 0.0]], [0.3, 0.3]));
     }

@@ -33,18 +33,13 @@ pub(super) fn assess(
     let (indicator, negative) = indicators(out, opts.relative_to);
     let stalls = history.stalls(&indicator);
     let smallest = |k: usize| longest_edge(out.discretization.mesh(), k) < floor;
-    // An element whose figure a shadow probe raised holds a shadow between
-    // its check points, which splitting resolves: it does not stall.
-    let probed =
-        |k: usize| (out.channels.iter()).any(|c| c.estimate.as_ref().is_some_and(|e| e.probed(k)));
-    let stalled = |k: usize| !probed(k) && History::stalled(k, &stalls, opts.stall_generations);
-    let frozen = |k: usize| smallest(k) || stalled(k);
+    let frozen = |k: usize| smallest(k) || History::stalled(k, &stalls, opts.stall_generations);
     let mut step = describe(out, &indicator, &negative, &frozen, opts);
     let marking = Marking {
         indicator: &indicator,
         frozen: &frozen,
         // One more stalled split freezes these.
-        stalling: &|k| !probed(k) && stalls[k] > 0 && stalls[k] + 1 >= opts.stall_generations,
+        stalling: &|k| stalls[k] > 0 && stalls[k] + 1 >= opts.stall_generations,
     };
     let shown = step.estimate_shown;
     let disc = &out.discretization;
