@@ -117,7 +117,7 @@ or with --target-error its own triangles]"))]
     #[arg(help_heading = "Output", long, value_name = "FILE.csv", help = format!(
         "Evaluate u_n and the iterated solution û_n = E + K u_n (superconvergent on smooth \
 surfaces, shadows clipped exactly) at the points of FILE.csv, with the estimated error of \
-their elements: rows x,y,z or x,y,z,nx,ny,nz (the normal picks the face at an edge), or a \
+each at the point: rows x,y,z or x,y,z,nx,ny,nz (the normal picks the face at an edge), or a \
 header row naming columns x, y, z [nx, ny, nz] [label]. Points are taken onto the surface \
 from up to {DEFAULT_SNAP:e} of the scene's diagonal away. The values are in the report \
 (text and JSON), or in --at-out."))]

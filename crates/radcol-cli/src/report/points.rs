@@ -14,7 +14,8 @@ pub struct PointChannel {
     pub u: f64,
     /// û_n = E + K u_n at the point.
     pub iterated: f64,
-    /// Estimated max error of u_n on the point's element, when estimated.
+    /// Estimated error of u_n at the point (the residual there plus what
+    /// the elements it sees carry to it), when estimated.
     pub estimate: Option<f64>,
     /// Estimated error of û_n at the point, when estimated.
     pub iterated_estimate: Option<f64>,

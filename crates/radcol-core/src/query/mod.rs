@@ -56,16 +56,20 @@ pub struct ChannelValue {
     pub u: f64,
     /// û_n(P) = E(P) + ρ(P) (K u_n)(P).
     pub iterated: f64,
-    /// The estimated max error of u_n on P's element (absolute), when the
-    /// solve estimated its error.
+    /// The estimated error of u_n(P) (absolute), when the solve estimated
+    /// its error: u - u_n = (û_n - u_n) + (u - û_n) at P, so it is
+    /// |û_n(P) - u_n(P)|, the residual at P (computed here, not
+    /// estimated), plus `iterated_estimate`, the error that the elements P
+    /// sees carry to it. The second part is what a point whose own element
+    /// is well resolved gets wrong from a brighter or worse neighbour (a
+    /// face of an object lit by an unresolved floor).
     pub estimate: Option<f64>,
     /// The estimated error of û_n(P) (absolute), when the solve estimated
     /// its error: û_n - u = ρ K (u_n - u) at P, so it is at most ρ(P) times
     /// the sum over the elements of P's view of each one's share of it
     /// (1/π) ∫_Δk G V, which the row of K holds, times its estimate. The
     /// shares sum to at most 1: this is a weighted mean of the element
-    /// estimates that P sees, times ρ(P), and usually well below
-    /// `estimate`.
+    /// estimates that P sees, times ρ(P).
     pub iterated_estimate: Option<f64>,
 }
 
@@ -190,17 +194,18 @@ impl PointEvaluator {
                         let ku: f64 = row.iter().zip(values).map(|(a, b)| a * b).sum();
                         let u = ch.solution.eval(at.element, at.st[0], at.st[1]);
                         let rho = fields.rho.eval(&site);
-                        let est = ch.estimate.as_ref();
+                        let iterated = fields.emission.eval(&site) + rho * ku;
+                        let iterated_estimate = ch.estimate.as_ref().map(|e| {
+                            let seen: f64 = (share.iter().zip(&e.elements))
+                                .map(|(m, x)| m.abs() * (x + e.visibility_bound))
+                                .sum();
+                            rho.abs() * seen
+                        });
                         ChannelValue {
                             u,
-                            iterated: fields.emission.eval(&site) + rho * ku,
-                            estimate: est.map(|e| e.elements[at.element] + e.visibility_bound),
-                            iterated_estimate: est.map(|e| {
-                                let seen: f64 = (share.iter().zip(&e.elements))
-                                    .map(|(m, x)| m.abs() * (x + e.visibility_bound))
-                                    .sum();
-                                rho.abs() * seen
-                            }),
+                            iterated,
+                            estimate: iterated_estimate.map(|ie| (iterated - u).abs() + ie),
+                            iterated_estimate,
                         }
                     })
                     .collect();
