@@ -128,7 +128,8 @@ pub enum RelativeTo {
 #[derive(Clone, Debug, Serialize)]
 pub struct ErrorEstimate {
     /// max |η| over S (η interpolated through each element's check
-    /// points, sampled on the lattice), absolute.
+    /// points, sampled on the lattice, and at the shadow probes),
+    /// absolute.
     pub max: f64,
     /// (∫_S η²)^½ of the same interpolant (absolute).
     pub l2: f64,
@@ -155,8 +156,8 @@ pub struct ErrorEstimate {
     /// Whether negative u_n is unphysical here (E ≥ 0 at every node and
     /// check point; ρ ≥ 0 always): then it is part of the element estimates.
     pub nonnegative_problem: bool,
-    /// Per element: max of |η| over its lattice (and of -u_n where negative
-    /// light is unphysical), absolute; length n.
+    /// Per element: max of |η| over its lattice and its shadow probes (and
+    /// of -u_n where negative light is unphysical), absolute; length n.
     #[serde(skip)]
     pub elements: Vec<f64>,
     /// Per element: whether u_n < 0 somewhere on its lattice while negative
