@@ -80,6 +80,32 @@ impl Facets {
         }
     }
 
+    /// Where triangle `v` lies: `Inside` when a corner is strictly inside
+    /// every facet (so the triangle meets the hull's interior), `Outside`
+    /// when every corner is beyond one facet, else `Across`. A flat hull
+    /// (fewer than four facets) decides nothing.
+    pub(crate) fn place_triangle(&self, v: &[DVec3; 3]) -> Place {
+        if self.planes.len() < 4 {
+            return Place::Across;
+        }
+        let t = self.tol;
+        let mut inside = [true; 3];
+        for &(n, d) in &self.planes {
+            let side = v.map(|x| x.dot(n) - d);
+            if side.iter().all(|&s| s > t) {
+                return Place::Outside;
+            }
+            for (i, s) in inside.iter_mut().zip(side) {
+                *i &= s < -t;
+            }
+        }
+        if inside.iter().any(|&i| i) {
+            Place::Inside
+        } else {
+            Place::Across
+        }
+    }
+
     pub(crate) fn classify(&self, lo: DVec3, hi: DVec3) -> Place {
         let t = self.tol;
         if lo.cmpgt(self.hi + t).any() || hi.cmplt(self.lo - t).any() {

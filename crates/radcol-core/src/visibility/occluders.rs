@@ -55,6 +55,10 @@ impl std::fmt::Debug for Occluders {
 /// Relative tolerance of the geometric tests (touching, coplanarity).
 const REL_TOL: f64 = 1e-9;
 
+/// What the exact test of an occluder knows of the pair: its elements'
+/// planes, segments inside its hull, and the hull's facets when found.
+type Own<'a> = (&'a [(DVec3, DVec3)], &'a [(DVec3, DVec3)], Option<&'a Facets>);
+
 /// Scenes with more triangles than this walk their BVH against the hull's
 /// facets ([`Facets`]); smaller ones against its bounding box only.
 const HULL_WALK_ABOVE: usize = 256;
@@ -212,8 +216,11 @@ impl Occluders {
             Some(among) => {
                 let mut hull = None;
                 let tol = REL_TOL * self.scale;
+                // The facets pay for themselves once a few are tested.
+                let facets = (among.len() > 4).then(|| Facets::new(&pts, tol));
+                let own = (&planes[..], &witnesses[..], facets.as_ref());
                 for &i in among {
-                    if !skip(i) && self.meets_hull(i, &pts, &planes, &witnesses, &mut hull, tol) {
+                    if !skip(i) && self.meets_hull(i, &pts, own, &mut hull, tol) {
                         out.push(i);
                     }
                 }
@@ -245,7 +252,8 @@ impl Occluders {
         };
         let mut hull: Option<HullAxes> = None;
         let test = |i: u32, hull: &mut Option<HullAxes>| {
-            !skip(i) && self.meets_hull(i, pts, own_planes, witnesses, hull, tol)
+            let own = (own_planes, witnesses, Some(&facets));
+            !skip(i) && self.meets_hull(i, pts, own, hull, tol)
         };
         self.walk(0, &facets, &mut |i| test(i, &mut hull), out);
         out.sort_unstable();
@@ -292,13 +300,15 @@ impl Occluders {
         }
     }
 
-    /// The exact test of occluder `i` against the interior of conv(`pts`).
+    /// The exact test of occluder `i` against the interior of conv(`pts`),
+    /// not of the planes `own_planes` (the pair's elements), with segments
+    /// inside the hull (`witnesses`) and its `facets` (when known) to
+    /// decide most occluders before the separating-axis test.
     fn meets_hull(
         &self,
         i: u32,
         pts: &[DVec3],
-        own_planes: &[(DVec3, DVec3)],
-        witnesses: &[(DVec3, DVec3)],
+        (own_planes, witnesses, facets): Own<'_>,
         hull: &mut Option<HullAxes>,
         tol: f64,
     ) -> bool {
@@ -319,6 +329,13 @@ impl Occluders {
         }
         if !(below && above) {
             return false;
+        }
+        // A corner strictly inside the hull, or every corner beyond one of
+        // its facets, decides it as the separating axes would.
+        match facets.map_or(Place::Across, |f| f.place_triangle(&t.v)) {
+            Place::Inside => return true,
+            Place::Outside => return false,
+            Place::Across => {}
         }
         witnesses.iter().any(|&(p, q)| crosses(p, q, t, tol))
             || hull
@@ -443,7 +460,7 @@ mod tests {
             occ.candidates(&pts, &planes, &mut walked);
             let mut hull = None;
             let every: Vec<u32> = (0..occ.len() as u32)
-                .filter(|&i| occ.meets_hull(i, &pts, &planes, &[], &mut hull, tol))
+                .filter(|&i| occ.meets_hull(i, &pts, (&planes, &[], None), &mut hull, tol))
                 .collect();
             assert_eq!(walked, every, "case {case}");
             found += every.len();
@@ -461,6 +478,49 @@ mod tests {
         assert!(
             found > 1000 && inside_boxes > 10,
             "{found} candidates, {inside_boxes} inside boxes"
+        );
+    }
+
+    /// The hull's facets decide an occluder (a corner strictly inside, or
+    /// every corner beyond one facet) as the separating axes do, and decide
+    /// most of those that the walk leaves to the exact test.
+    #[test]
+    fn the_facets_decide_as_the_separating_axes_do() {
+        let mut rnd = crate::testing::uniform(0x9e3779b97f4a7c15u64);
+        let mut p = || DVec3::new(rnd(), rnd(), rnd());
+        let tris: Vec<[DVec3; 3]> = (0..400)
+            .map(|_| {
+                let c = p();
+                let d = [p(), p(), p()];
+                d.map(|x| c + (x - DVec3::splat(0.5)) * 0.2)
+            })
+            .collect();
+        let occ = Occluders::new(&tris);
+        let tol = REL_TOL * occ.scale();
+        let (mut inside, mut outside, mut across) = (0, 0, 0);
+        for _ in 0..40 {
+            let pts = [p(), p(), p(), p(), p(), p()];
+            let facets = Facets::new(&pts, tol);
+            let axes = HullAxes::new(&pts);
+            for i in 0..occ.len() as u32 {
+                let t = occ.get(i);
+                let meets = axes.meets(&pts, t, tol);
+                match facets.place_triangle(&t.v) {
+                    Place::Inside => {
+                        assert!(meets, "occluder {i} inside but separated");
+                        inside += 1;
+                    }
+                    Place::Outside => {
+                        assert!(!meets, "occluder {i} outside but meeting");
+                        outside += 1;
+                    }
+                    Place::Across => across += 1,
+                }
+            }
+        }
+        assert!(
+            inside > 1000 && outside > 1000 && across > 100,
+            "{inside} inside, {outside} outside, {across} undecided"
         );
     }
 
