@@ -130,35 +130,6 @@ impl Grading {
     }
 }
 
-/// Per element of `mesh`, whether it reaches one of the `lines` (concave
-/// edges and contact lines, [`concave_lines`]): the ball about its centroid
-/// through its farthest vertex, grown by a relative 1e-9 of the scene,
-/// meets the line. Where u has a direction-dependent limit the element is
-/// one of these: such points lie where surfaces meet.
-pub fn near_lines(mesh: &super::Mesh, lines: &[[DVec3; 2]]) -> Vec<bool> {
-    use rayon::prelude::*;
-    if lines.is_empty() {
-        return vec![false; mesh.len()];
-    }
-    let (lo, hi) = mesh.surface().bounding_box();
-    let eps = 1e-9 * (hi - lo).max_element();
-    // The lines' boxes, to skip most of them with three comparisons.
-    let boxes: Vec<(DVec3, DVec3)> = lines.iter().map(|&[a, b]| (a.min(b), a.max(b))).collect();
-    (0..mesh.len())
-        .into_par_iter()
-        .map(|k| {
-            let v = mesh.vertices(k);
-            let c = (v[0] + v[1] + v[2]) / 3.0;
-            let r = v.iter().map(|x| (*x - c).length()).fold(0.0, f64::max) + eps;
-            lines.iter().zip(&boxes).any(|(&[a, b], &(l, h))| {
-                (c + r).cmpge(l).all()
-                    && (c - r).cmple(h).all()
-                    && point_segment_distance(c, a, b) <= r
-            })
-        })
-        .collect()
-}
-
 fn point_segment_distance(x: DVec3, a: DVec3, b: DVec3) -> f64 {
     let ab = b - a;
     let len2 = ab.length_squared();
@@ -394,59 +365,6 @@ mod tests {
                 }
             }
         }
-    }
-
-    /// In the box room refined twice, the elements that reach a wall's edge
-    /// are exactly those with a vertex on two of its planes or a vertex
-    /// within their own circumradius of one (the ball test); the room's
-    /// centre elements are not near any, and a floor under a floating
-    /// occluder has no line at all.
-    #[test]
-    fn elements_near_lines_are_those_at_the_edges() {
-        let (lx, ly, lz) = (4.0, 3.0, 5.0);
-        let room = Arc::new(box_room(lx, ly, lz));
-        let mesh = Mesh::new(room.clone(), 2);
-        let near = near_lines(&mesh, &concave_lines(&room));
-        let mut counts = [0, 0];
-        for (k, &n) in near.iter().enumerate() {
-            let v = mesh.vertices(k);
-            let on_edge = v.iter().any(|x| {
-                let at = |c: f64, l: f64| c.abs() < 1e-9 || (c - l).abs() < 1e-9;
-                [at(x.x, lx), at(x.y, ly), at(x.z, lz)].iter().filter(|&&b| b).count() >= 2
-            });
-            // A vertex on an edge puts the element's ball on it.
-            if on_edge {
-                assert!(n, "element {k} touches an edge");
-            }
-            // Far from every edge (further than its ball reaches): not near.
-            let c = (v[0] + v[1] + v[2]) / 3.0;
-            let r = v.iter().map(|x| (*x - c).length()).fold(0.0, f64::max);
-            let to_edge = [c.x.min(lx - c.x), c.y.min(ly - c.y), c.z.min(lz - c.z)];
-            let mut d = to_edge;
-            d.sort_by(f64::total_cmp);
-            // The nearest edge is at the hypot of the two smallest distances
-            // to the walls (one of them 0: the element lies in a wall).
-            if d[0].hypot(d[1]) > r * 1.001 {
-                assert!(!n, "element {k} is {} from the edges, its ball {r}", d[0].hypot(d[1]));
-            }
-            counts[n as usize] += 1;
-        }
-        assert!(counts[0] > 0 && counts[1] > 0, "{counts:?}");
-        let floor = crate::geometry::shapes::floor_under_occluder(
-            &[
-                DVec3::new(-0.5, -0.5, 0.6),
-                DVec3::new(0.5, -0.5, 0.6),
-                DVec3::new(0.5, 0.5, 0.6),
-                DVec3::new(-0.5, 0.5, 0.6),
-            ],
-            &[
-                DVec3::new(0.0, 0.0, 0.05),
-                DVec3::new(0.1, 0.0, 0.05),
-                DVec3::new(0.1, 0.1, 0.05),
-                DVec3::new(0.0, 0.1, 0.05),
-            ],
-        );
-        assert!(concave_lines(&floor).is_empty());
     }
 
     /// Curved and convex surfaces have none.

@@ -7,24 +7,7 @@ use super::budget::budget;
 use super::history::{singular_points, History, SingularPoint};
 use super::{longest_edge, AdaptOptions, AdaptStep, StopReason};
 use crate::estimate::RelativeTo;
-use crate::mesh::grading::{concave_lines, near_lines};
-use crate::mesh::Mesh;
 use crate::run::{SolveConfig, SolveOutcome};
-
-/// Per element, over how many stalled splits it is frozen: `generations`
-/// where it reaches a concave edge or contact line, where u can have a
-/// direction-dependent limit (the foot of a block's corner), and twice
-/// that elsewhere, where a stall is the estimate before the element
-/// resolves what is smaller than it (a small occluder's shadow on a large
-/// floor element: the estimate stayed flat for four splits and fell once
-/// the elements were smaller than the shadow's penumbrae).
-pub(super) fn stall_generations(mesh: &Mesh, generations: u32) -> Vec<u32> {
-    let lines = concave_lines(mesh.surface());
-    near_lines(mesh, &lines)
-        .into_iter()
-        .map(|near| if near { generations } else { 2 * generations })
-        .collect()
-}
 
 /// What a solve tells the loop: the step as reported, whether to stop,
 /// the elements to split (worst first), every element's indicator and
@@ -49,16 +32,14 @@ pub(super) fn assess(
 ) -> Assessment {
     let (indicator, negative) = indicators(out, opts.relative_to);
     let stalls = history.stalls(&indicator);
-    let mesh = out.discretization.mesh();
-    let smallest = |k: usize| longest_edge(mesh, k) < floor;
-    let generations = stall_generations(mesh, opts.stall_generations);
-    let frozen = |k: usize| smallest(k) || History::stalled(k, &stalls, generations[k]);
+    let smallest = |k: usize| longest_edge(out.discretization.mesh(), k) < floor;
+    let frozen = |k: usize| smallest(k) || History::stalled(k, &stalls, opts.stall_generations);
     let mut step = describe(out, &indicator, &negative, &frozen, opts);
     let marking = Marking {
         indicator: &indicator,
         frozen: &frozen,
         // One more stalled split freezes these.
-        stalling: &|k| stalls[k] > 0 && stalls[k] + 1 >= generations[k],
+        stalling: &|k| stalls[k] > 0 && stalls[k] + 1 >= opts.stall_generations,
     };
     let shown = step.estimate_shown;
     let disc = &out.discretization;

@@ -13,12 +13,7 @@
 //! three splits, then tenfold). So an element
 //! whose estimate fell by less than [`STALL_RATIO`] per split on average
 //! over its last `stall_generations` splits is not split again (nor is one
-//! at the size floor, `AdaptOptions::min_size`). Such points lie where
-//! surfaces meet; away from concave edges and contact lines an element
-//! gets twice the splits before it is frozen, since there a stall is an
-//! element larger than what it holds (a small occluder's shadow on a
-//! large floor element stayed flat for four splits, then fell once the
-//! elements were smaller than its penumbrae). The elements left
+//! at the size floor, `AdaptOptions::min_size`), and the elements left
 //! above the target that way are gathered into the [`SingularPoint`]s the
 //! report names, with how many of them are at the floor.
 

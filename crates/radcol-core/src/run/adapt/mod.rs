@@ -163,7 +163,7 @@ pub fn solve_adaptive(
     let mesh = discretize(problem, &cfg)?.mesh().clone();
     // With hp or a graded start, every element's degree and how it came to be.
     let degrees = Degrees::start(&cfg, &mesh, opts, backend)?;
-    let history = History::new(mesh.len(), 2 * opts.stall_generations as usize);
+    let history = History::new(mesh.len(), opts.stall_generations as usize);
     let start = Start {
         mesh,
         degrees,

@@ -39,10 +39,7 @@ pub struct AdaptOptions {
     pub min_size: f64,
     /// An element whose estimate fell by less than [`super::STALL_RATIO`] per
     /// split on average over its last this many splits is not split again
-    /// (0: only the size floor applies), where it reaches a concave edge or
-    /// a contact line; elsewhere twice as many (no surfaces meet there, so
-    /// a stall is an element still larger than what it holds, such as a
-    /// small occluder's shadow). At such points the depth limit alone costs
+    /// (0: only the size floor applies). At such points the depth limit alone costs
     /// a solve per wasted generation (the Cornell box from its 50 triangles
     /// to 1e-3: 12 steps and 14 973 unknowns with the depth limit alone, 9
     /// steps and 7 710 unknowns with 3 stalled generations).

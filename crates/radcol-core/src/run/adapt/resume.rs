@@ -40,7 +40,7 @@ impl Resume {
             ..opts.clone()
         };
         Ok(Self {
-            history: History::new(mesh.len(), 2 * opts.stall_generations as usize),
+            history: History::new(mesh.len(), opts.stall_generations as usize),
             degrees: Degrees::start(cfg, mesh, &opts, backend)?,
         })
     }
@@ -118,7 +118,7 @@ pub fn resume_adaptive(
         Start {
             mesh: mesh.clone(),
             degrees: resume.degrees.clone(),
-            history: History::new(mesh.len(), 2 * opts.stall_generations as usize),
+            history: History::new(mesh.len(), opts.stall_generations as usize),
             guess: Some(
                 channels
                     .iter()
