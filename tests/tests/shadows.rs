@@ -501,7 +501,10 @@ fn the_estimate_follows_penumbrae_of_every_width() {
         );
         assert_eq!(res.stop, StopReason::Reached, "half-side {a}");
         let true_err = last.true_error.unwrap();
-        assert!(true_err <= target, "half-side {a}: true error {true_err:.3e}");
+        assert!(
+            true_err <= target,
+            "half-side {a}: true error {true_err:.3e}"
+        );
         for (s, eff) in res.steps.iter().zip(&effectivities) {
             if s.true_error.unwrap() > 0.1 * target || std::ptr::eq(s, last) {
                 assert!(
