@@ -13,14 +13,13 @@
 //!
 //!     cargo run --release -p radcol-benches --example fixed_receivers [-- H [MAX_TRIANGLES]]
 
-use radcol_benches::fit_exponent as fit;
+use radcol_benches::{bunny_rooms, fit_exponent as fit};
 use radcol_core::assembly::{AssemblyBackend, AssemblyPlan, CpuBackend, QuadratureOptions};
 use radcol_core::discretization::Discretization;
 use radcol_core::mesh::Mesh;
 use radcol_core::nodes::NodeSet;
 use radcol_core::scene::load_obj;
 use radcol_core::visibility::analyze;
-use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -28,19 +27,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let h: f64 = args.next().map(|a| a.parse()).transpose()?.unwrap_or(100.0);
     let max: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(3674);
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let mut files: Vec<(usize, PathBuf)> = [100, 200, 400, 600, 1000, 2000]
-        .iter()
-        .map(|&n| (n, root.join(format!("data/bunny_room_{n}.obj"))))
-        .collect();
-    files.push((3674, root.join("../scenes/bunny_room.obj")));
+    let files = bunny_rooms(&[100, 200, 400, 600, 1000, 2000, 3674], max);
     println!(
         "room elements split to edges of at most {h}; the bunny occludes, carries no unknowns"
     );
     println!("bunny triangles, room elements, unknowns, partly visible pairs, plan s, fill s, plan + fill s, against the first");
     let (mut plan_t, mut fill_t, mut both_t) = (Vec::new(), Vec::new(), Vec::new());
     let mut first = None;
-    for (n, path) in files.into_iter().filter(|(n, _)| *n <= max) {
+    for (n, path) in files {
         let scene = load_obj(&path)?;
         let surface = scene.surface.clone();
         let occluder: Vec<bool> = surface

@@ -29,7 +29,6 @@ use radcol_core::nodes::NodeSet;
 use radcol_core::scene::{load_obj, Scene};
 use radcol_core::visibility::analyze;
 use rayon::prelude::*;
-use std::path::PathBuf;
 use std::sync::Arc;
 
 /// Pieces per edge of the midpoint rule (PIECES² pieces).
@@ -109,16 +108,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let max: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(3674);
     let level: u32 = args.next().map(|a| a.parse()).transpose()?.unwrap_or(0);
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let mut files: Vec<(usize, PathBuf)> = [100, 200, 400, 1000]
-        .iter()
-        .map(|&n| (n, root.join(format!("data/bunny_room_{n}.obj"))))
-        .collect();
-    files.push((3674, root.join("../scenes/bunny_room.obj")));
+    let files = radcol_benches::bunny_rooms(&[100, 200, 400, 1000, 3674], max);
     let budgets = [1e-3, 1e-2, 3e-2];
     println!("level {level}; per row point, per unit of the brightest reflector's u: W = Σ m (worst case), H = Hoeffding at δ = 1e-6; median / 90 % / max");
     println!("bunny triangles, elements, partly visible pairs, W, H, share of the pairs a worst-case budget τ per point approximates for τ = {budgets:?}");
-    for (n, path) in files.into_iter().filter(|(n, _)| *n <= max) {
+    for (n, path) in files {
         let scene = load_obj(&path)?;
         let mesh = Arc::new(Mesh::new(scene.surface.clone(), level));
         let disc = Arc::new(Discretization::new(mesh, NodeSet::new(1, 1.0 / 6.0)?));

@@ -17,7 +17,7 @@
 //! MAX_TRIANGLES (default 1000) leaves out the larger bunnies: the whole
 //! bunny (3 674) takes about a minute and a half on 2 cores.
 
-use radcol_benches::fit_exponent as fit;
+use radcol_benches::{bunny_rooms, fit_exponent as fit};
 use radcol_core::assembly::{AssemblyBackend, AssemblyPlan, CpuBackend, QuadratureOptions};
 use radcol_core::discretization::Discretization;
 use radcol_core::hmatrix::radiosity::PlanEntries;
@@ -26,7 +26,6 @@ use radcol_core::mesh::Mesh;
 use radcol_core::nodes::NodeSet;
 use radcol_core::scene::load_obj;
 use radcol_core::visibility::analyze;
-use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -35,17 +34,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let max: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(1000);
     // A visibility budget: the bounce pairs' approximation (0: exact).
     let budget: f64 = args.next().map(|a| a.parse()).transpose()?.unwrap_or(0.0);
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let mut files: Vec<(usize, PathBuf)> = [100, 200, 400, 600, 1000, 2000]
-        .iter()
-        .map(|&n| (n, root.join(format!("data/bunny_room_{n}.obj"))))
-        .collect();
-    files.push((3674, root.join("../scenes/bunny_room.obj")));
+    let files = bunny_rooms(&[100, 200, 400, 600, 1000, 2000, 3674], max);
     println!("visibility budget {budget}");
     println!("bunny triangles, elements, partly visible pairs, of them approximated, plan s, fill s, fill µs per partly visible pair, compressed s, stored numbers, of N²");
     let (mut per_pair, mut fill_s) = (Vec::new(), Vec::new());
     let (mut stored_t, mut stored_e) = (Vec::new(), Vec::new());
-    for (n, path) in files.into_iter().filter(|(n, _)| *n <= max) {
+    for (n, path) in files {
         let scene = load_obj(&path)?;
         let mesh = Arc::new(Mesh::new(scene.surface.clone(), 0));
         let disc = Arc::new(Discretization::new(mesh, NodeSet::new(1, 1.0 / 6.0)?));

@@ -12,3 +12,21 @@ pub fn fit_exponent(points: &[(f64, f64)]) -> f64 {
     });
     sxy / sxx
 }
+
+/// The bunny rooms (`data/bunny_room_N.obj`, made by
+/// `data/make_bunny_rooms.py`, and the whole bunny's
+/// `scenes/bunny_room.obj`) whose bunnies have at most `max` triangles and
+/// are among `sizes` (the whole one: 3 674), smallest first, with their
+/// bunnies' triangle counts.
+pub fn bunny_rooms(sizes: &[usize], max: usize) -> Vec<(usize, std::path::PathBuf)> {
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let mut sizes: Vec<usize> = sizes.iter().copied().filter(|&n| n <= max).collect();
+    sizes.sort_unstable();
+    sizes
+        .into_iter()
+        .map(|n| match n {
+            3674 => (n, root.join("../scenes/bunny_room.obj")),
+            _ => (n, root.join(format!("data/bunny_room_{n}.obj"))),
+        })
+        .collect()
+}
