@@ -403,6 +403,23 @@ fn to_1e_4_on_the_shadow_family() {
     }
 }
 
+/// `case` solved adaptively at r = 1 from level 1 to `target` relative to
+/// the reflected light.
+fn to_reflected_target(case: &Case, target: f64) -> radcol_core::run::adapt::AdaptOutcome {
+    let cfg = SolveConfig {
+        degree: 1,
+        alpha: auto_alpha(1),
+        level: 1,
+        ..Default::default()
+    };
+    let opts = AdaptOptions {
+        target,
+        relative_to: radcol_core::estimate::RelativeTo::Reflected,
+        ..Default::default()
+    };
+    solve_adaptive(&problem(case), &cfg, &opts, &CpuBackend, |_| {}).expect("solves")
+}
+
 /// A target relative to the reflected light (max over the nodes of
 /// u_n − E: here the floor's light, about half the emitter's): the loop
 /// reaches it, the true max error over the whole surface (Lambert's
@@ -410,23 +427,10 @@ fn to_1e_4_on_the_shadow_family() {
 /// the floor's light, and the estimate follows it.
 #[test]
 fn a_target_relative_to_the_reflected_light_is_reached_on_the_floor() {
-    use radcol_core::estimate::RelativeTo;
     let case = &cases()[0];
-    let p = problem(case);
-    let cfg = SolveConfig {
-        degree: 1,
-        alpha: auto_alpha(1),
-        level: 1,
-        ..Default::default()
-    };
     let target = 3e-3;
-    let opts = AdaptOptions {
-        target,
-        relative_to: RelativeTo::Reflected,
-        ..Default::default()
-    };
     let t = std::time::Instant::now();
-    let res = solve_adaptive(&p, &cfg, &opts, &CpuBackend, |_| {}).expect("solves");
+    let res = to_reflected_target(case, target);
     let last = res.steps.last().unwrap();
     let e = res.outcome.channels[0].estimate.as_ref().unwrap();
     let true_err = last.true_error.unwrap();
@@ -462,27 +466,14 @@ fn a_target_relative_to_the_reflected_light_is_reached_on_the_floor() {
 /// every step whose true error is above a tenth of the target's.
 #[test]
 fn the_estimate_follows_penumbrae_of_every_width() {
-    use radcol_core::estimate::RelativeTo;
     for a in [0.05, 0.15, 0.35] {
         let case = Case {
             name: "penumbra",
             emitter: square(0.0, 0.0, a, a, 0.6),
             occluder: square(0.1, 0.0, 0.25, 0.25, 0.3),
         };
-        let p = problem(&case);
-        let cfg = SolveConfig {
-            degree: 1,
-            alpha: auto_alpha(1),
-            level: 1,
-            ..Default::default()
-        };
         let target = 2e-2;
-        let opts = AdaptOptions {
-            target,
-            relative_to: RelativeTo::Reflected,
-            ..Default::default()
-        };
-        let res = solve_adaptive(&p, &cfg, &opts, &CpuBackend, |_| {}).expect("solves");
+        let res = to_reflected_target(&case, target);
         let last = res.steps.last().unwrap();
         let effectivities: Vec<f64> = res
             .steps
