@@ -28,6 +28,7 @@ mod hp;
 mod operator;
 mod progress;
 mod query;
+mod ranks;
 mod relight;
 mod reuse;
 mod scenes;

@@ -203,6 +203,20 @@ pub enum InputError {
         /// The tolerance asked for.
         value: f64,
     },
+    /// The dense operator or LU asked for in a solve spread over ranks.
+    #[error("a solve spread over {ranks} ranks stores the compressed operator and solves it with GMRES; the dense operator and LU run in one process (run without mpirun, or choose `--operator compressed` and `--solver gmres`)")]
+    NotDistributed {
+        /// The ranks of the solve.
+        ranks: usize,
+    },
+    /// Fewer rows than ranks to share them.
+    #[error("{unknowns} unknowns are too few to share among {ranks} ranks (each needs at least one leaf of the cluster tree); use fewer ranks or a finer mesh")]
+    TooFewRows {
+        /// Unknowns of the mesh.
+        unknowns: usize,
+        /// The ranks of the solve.
+        ranks: usize,
+    },
     /// LU asked for with a compressed operator.
     #[error("LU factors the dense matrix, and the compressed operator does not store one: solve the compressed operator with GMRES (`SolverKind::Gmres`), or choose the dense operator (`OperatorChoice::Dense`)")]
     CompressedLu,

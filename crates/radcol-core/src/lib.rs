@@ -95,6 +95,7 @@ pub mod export;
 #[cfg(all(feature = "scenes", feature = "render"))]
 pub mod prelude;
 pub mod query;
+pub mod ranks;
 #[cfg(feature = "render")]
 pub mod render;
 pub mod run;

@@ -16,6 +16,7 @@ const LAYERS: &[&str] = &[
     "backend_kind",
     "testing",
     "solve",
+    "ranks",
     "error",
     "expr",
     "nodes",

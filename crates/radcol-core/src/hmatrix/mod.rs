@@ -25,6 +25,7 @@ mod predict;
 pub mod radiosity;
 pub mod reuse;
 mod sample;
+pub mod share;
 
 use cluster::{Aabb, ClusterTree};
 use leaf::{dense_leaf_numbers, leaf, Leaf, LeafData};
@@ -34,6 +35,7 @@ use std::ops::ControlFlow;
 
 pub use predict::HPrediction;
 pub use sample::SampledSize;
+pub use share::RowShare;
 
 /// What is known of a matrix's blocks without computing an entry: which
 /// are zero, and which are smooth enough to compress. The block tree is
@@ -209,6 +211,10 @@ pub struct HMatrix {
     ct: ClusterTree,
     leaves: Vec<Leaf>,
     stats: HStats,
+    /// The positions of the row order whose rows it holds: all of them,
+    /// or one rank's share ([`RowShare`]), whose leaves are those that
+    /// meet these rows.
+    held: std::ops::Range<usize>,
 }
 
 impl HMatrix {
@@ -282,22 +288,33 @@ impl HMatrix {
     /// `ys[c] = A xs[c]` for every c, in one pass over the leaves: each leaf
     /// is read from memory once and applied to every vector.
     pub fn matvec_many(&self, xs: &[&[f64]], ys: &mut [&mut [f64]]) {
+        let m = self.stats.shape.0;
+        assert_eq!(self.held, 0..m, "the whole matrix: a share multiplies its rows");
+        assert!(ys.iter().all(|y| y.len() == m), "matvec shapes");
+        let yp = self.products(xs);
+        for (y, yp) in ys.iter_mut().zip(yp.chunks_exact(m.max(1))) {
+            for (p, &i) in self.rt.order.iter().enumerate() {
+                y[i] = yp[p];
+            }
+        }
+    }
+
+    /// The products of the leaves held with every `xs[c]` (original
+    /// column indices), in row-tree order: m numbers per vector, of which
+    /// the `held` positions are complete (leaves that straddle the edge of
+    /// a share add to rows beyond it, which are not read).
+    fn products(&self, xs: &[&[f64]]) -> Vec<f64> {
         let (m, n) = self.stats.shape;
-        assert_eq!(xs.len(), ys.len(), "as many products as vectors");
-        assert!(
-            xs.iter().all(|x| x.len() == n) && ys.iter().all(|y| y.len() == m),
-            "matvec shapes"
-        );
+        assert!(xs.iter().all(|x| x.len() == n), "matvec shapes");
         let k = xs.len();
         if m == 0 || k == 0 {
-            return;
+            return Vec::new();
         }
         let xp: Vec<Vec<f64>> = xs
             .iter()
             .map(|x| self.ct.order.iter().map(|&j| x[j]).collect())
             .collect();
-        let yp = self
-            .leaves
+        self.leaves
             .par_iter()
             .fold(
                 || vec![0.0; m * k],
@@ -314,12 +331,7 @@ impl HMatrix {
                     a.iter_mut().zip(&b).for_each(|(x, y)| *x += y);
                     a
                 },
-            );
-        for (y, yp) in ys.iter_mut().zip(yp.chunks_exact(m)) {
-            for (p, &i) in self.rt.order.iter().enumerate() {
-                y[i] = yp[p];
-            }
-        }
+            )
     }
 }
 

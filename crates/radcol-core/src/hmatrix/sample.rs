@@ -63,7 +63,28 @@ impl HMatrix {
         reuse: Option<&Reuse<'_>>,
         check: impl FnOnce(&SampledSize) -> Result<(), E>,
     ) -> Result<(Self, SampledSize), E> {
-        let t = Blocks::new(row_boxes, col_boxes, entries, opts, reuse);
+        Self::build_part(row_boxes, col_boxes, entries, opts, reuse, None, check)
+    }
+
+    /// [`HMatrix::build_checked`] of the whole matrix (`share` None), or of
+    /// rank `share.0`'s share of its rows among `share.1` ranks: the leaves
+    /// whose rows meet the rank's range of the row order
+    /// ([`super::share::cuts`]), the prediction and `check` of those alone.
+    /// A share takes nothing from a previous matrix.
+    ///
+    /// # Errors
+    /// What `check` returns.
+    pub(super) fn build_part<E>(
+        row_boxes: &[Aabb],
+        col_boxes: &[Aabb],
+        entries: &dyn Entries,
+        opts: &HOptions,
+        reuse: Option<&Reuse<'_>>,
+        share: Option<(usize, usize)>,
+        check: impl FnOnce(&SampledSize) -> Result<(), E>,
+    ) -> Result<(Self, SampledSize), E> {
+        let reuse = reuse.filter(|_| share.is_none());
+        let t = Blocks::new(row_boxes, col_boxes, entries, opts, reuse, share);
         let classes = t.classes();
         let sample: Vec<usize> = classes.values().flat_map(|c| systematic(c)).collect();
         let make = |b: usize| {
@@ -110,6 +131,7 @@ impl HMatrix {
             ct: t.trees.ct,
             leaves,
             stats,
+            held: t.held,
         };
         Ok((h, size))
     }
@@ -117,12 +139,14 @@ impl HMatrix {
 
 /// The block tree of a build: its cluster trees, its leaves (row cluster,
 /// column cluster, admissible), which the structure proves zero, and which
-/// are taken from a previous matrix (its leaf's index).
+/// are taken from a previous matrix (its leaf's index); of a share, only
+/// the blocks whose rows meet `held`, the positions of the row order held.
 struct Blocks {
     trees: Trees,
     blocks: Vec<(usize, usize, bool)>,
     zero: Vec<bool>,
     reused: Vec<Option<usize>>,
+    held: std::ops::Range<usize>,
 }
 
 impl Blocks {
@@ -132,6 +156,7 @@ impl Blocks {
         entries: &dyn Entries,
         opts: &HOptions,
         reuse: Option<&Reuse<'_>>,
+        share: Option<(usize, usize)>,
     ) -> Self {
         let trees = reuse
             .and_then(|p| p.trees(row_boxes, col_boxes, opts.leaf_size))
@@ -148,9 +173,9 @@ impl Blocks {
             ControlFlow::Continue(())
         };
         let _ = visit_blocks(&trees.rt, &trees.ct, entries, opts, &mut take, &mut visit);
-        let (blocks, reused): (Vec<_>, Vec<_>) = found.into_inner().into_iter().unzip();
+        let (mut blocks, mut reused): (Vec<_>, Vec<_>) = found.into_inner().into_iter().unzip();
         let (rt, ct) = (&trees.rt, &trees.ct);
-        let zero = blocks
+        let mut zero: Vec<bool> = blocks
             .par_iter()
             .zip(&reused)
             .map(|(&(r, c, _), old)| {
@@ -164,11 +189,28 @@ impl Blocks {
                     )
             })
             .collect();
+        let mut held = 0..rt.order.len();
+        if let Some((rank, size)) = share {
+            let cuts = super::share::cuts(rt, ct, &blocks, &zero, size);
+            held = cuts[rank]..cuts[rank + 1];
+            let meets = |&(r, _, _): &(usize, usize, bool)| {
+                let rc = &rt.clusters[r];
+                rc.start < held.end && held.start < rc.end
+            };
+            let keep: Vec<bool> = blocks.iter().map(meets).collect();
+            let mut k = keep.iter();
+            blocks.retain(|_| *k.next().expect("one flag a block"));
+            let mut k = keep.iter();
+            zero.retain(|_| *k.next().expect("one flag a block"));
+            let mut k = keep.iter();
+            reused.retain(|_| *k.next().expect("one flag a block"));
+        }
         Self {
             trees,
             blocks,
             zero,
             reused,
+            held,
         }
     }
 

@@ -62,6 +62,18 @@ pub struct SolveConfig {
     pub compression: HOptions,
     /// Progress observer (assembly row blocks, channels solved), if any.
     pub progress: Option<ProgressHandle>,
+    /// The ranks a distributed solve is spread over (`crate::ranks`), when
+    /// more than one process runs it: each stores its share of the
+    /// compressed operator's rows, and GMRES runs on all of them; the rest
+    /// of the solve is the same on every rank. None: this process alone.
+    pub ranks: Option<std::sync::Arc<dyn crate::ranks::Ranks>>,
+}
+
+impl SolveConfig {
+    /// The ranks of a distributed solve, when there are more than one.
+    pub fn distributed(&self) -> Option<&std::sync::Arc<dyn crate::ranks::Ranks>> {
+        self.ranks.as_ref().filter(|r| r.size() > 1)
+    }
 }
 
 impl Default for SolveConfig {
@@ -86,6 +98,7 @@ impl Default for SolveConfig {
                 ..HOptions::default()
             },
             progress: None,
+            ranks: None,
         }
     }
 }

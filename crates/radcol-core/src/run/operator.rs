@@ -9,7 +9,7 @@ use crate::assembly::AssemblyPlan;
 use crate::discretization::Discretization;
 use crate::error::InputError;
 use crate::hmatrix::radiosity::PlanEntries;
-use crate::hmatrix::{HMatrix, HPrediction, HStats};
+use crate::hmatrix::{HMatrix, HPrediction, HStats, RowShare};
 use crate::matrix::DenseMatrix;
 use crate::solve::LinearOperator;
 use serde::Serialize;
@@ -113,6 +113,31 @@ pub fn decide(
     }
     let estimate = MemoryEstimate::with_available(unknowns, available);
     let gib = |b: f64| format!("{:.2} GiB", b / (1u64 << 30) as f64);
+    if let Some(ranks) = cfg.distributed().map(|r| r.size()) {
+        return match (cfg.operator, cfg.solver) {
+            (OperatorChoice::Dense, _) | (_, SolverKind::Lu) => {
+                Err(InputError::NotDistributed { ranks })
+            }
+            (choice, SolverKind::Gmres) => Ok(OperatorDecision {
+                kind: OperatorKind::Compressed,
+                reason: format!(
+                    "{} over {ranks} ranks, each storing its share of the rows, tolerance {tol:e}",
+                    if choice == OperatorChoice::Compressed {
+                        "asked for"
+                    } else {
+                        "spread"
+                    }
+                ),
+                instead: None,
+                asked: choice == OperatorChoice::Compressed,
+                switchable: false,
+                sampled_error: None,
+                predicted_bytes: None,
+                planned_bytes: None,
+                sampled_bytes: None,
+            }),
+        };
+    }
     let decision = |kind, reason: String, instead, asked| {
         Ok(OperatorDecision {
             kind,
@@ -275,15 +300,19 @@ pub(crate) fn predict_compressed(
     let available = available_memory().filter(|_| cfg.check_memory);
     let pair_table = crate::assembly::pair_table_bytes(disc.mesh().len() as f64);
     let p = crate::hmatrix::radiosity::predict(disc, &cfg.compression, count_limit(available));
+    // Spread over ranks, each holds about its share.
+    let ranks = cfg.distributed().map_or(1, |r| r.size()) as f64;
     match available {
-        Some(a) if pair_table + p.bytes() > usable(a) => Err(InputError::CompressedWontFit {
-            unknowns: disc.len() as u64,
-            operator: p.bytes(),
-            near: p.near_bytes,
-            complete: p.complete,
-            pair_table,
-            available: a,
-        }),
+        Some(a) if pair_table + p.bytes() / ranks > usable(a) => {
+            Err(InputError::CompressedWontFit {
+                unknowns: disc.len() as u64,
+                operator: p.bytes(),
+                near: p.near_bytes,
+                complete: p.complete,
+                pair_table,
+                available: a,
+            })
+        }
         _ => Ok(p),
     }
 }
@@ -315,8 +344,11 @@ pub(crate) fn build_compressed(
     previous: Option<(&HMatrix, &Unchanged)>,
     decision: &mut OperatorDecision,
     memory: &mut MemoryUse,
-) -> Result<(HMatrix, u64), InputError> {
+) -> Result<(GeometricOperator, u64), InputError> {
     let entries = PlanEntries::new(plan);
+    if let Some(ranks) = cfg.distributed() {
+        return build_share(&entries, cfg, ranks.clone(), decision, memory);
+    }
     let available = available_memory().filter(|_| cfg.check_memory);
     // Counted over the plan's block tree before any block is computed;
     // not when blocks are taken from the previous step's operator, where
@@ -344,7 +376,41 @@ pub(crate) fn build_compressed(
     if cfg.check_memory {
         memory.check_compressed(&h, available_memory())?;
     }
-    Ok((h, entries.evaluations()))
+    Ok((GeometricOperator::Compressed(h), entries.evaluations()))
+}
+
+/// [`build_compressed`] spread over `ranks`: this rank's share of the rows
+/// ([`RowShare`]), its size predicted from its own sample and checked
+/// against this process's memory; the product error measured over the
+/// whole matrix's sample rows (each rank checks those it holds).
+fn build_share(
+    entries: &PlanEntries<'_>,
+    cfg: &SolveConfig,
+    ranks: std::sync::Arc<dyn crate::ranks::Ranks>,
+    decision: &mut OperatorDecision,
+    memory: &mut MemoryUse,
+) -> Result<(GeometricOperator, u64), InputError> {
+    let available = available_memory().filter(|_| cfg.check_memory);
+    let (rows, cols) = entries.boxes();
+    let (share, sampled) = RowShare::build(&rows, &cols, entries, &cfg.compression, ranks, |s| {
+        *memory = memory.with_matrix(Some(s.bytes));
+        match cfg.check_memory {
+            true => memory.check(available),
+            false => Ok(()),
+        }
+    })?;
+    if share.counts().contains(&0) {
+        return Err(InputError::TooFewRows {
+            unknowns: share.local().stats().shape.0,
+            ranks: share.counts().len(),
+        });
+    }
+    decision.sampled_bytes = Some(sampled);
+    decision.sampled_error = Some(share.sampled_error(entries, SAMPLED_ROWS));
+    if cfg.check_memory {
+        memory.check_compressed(share.local(), available_memory())?;
+    }
+    Ok((GeometricOperator::Shared(share), entries.evaluations()))
 }
 
 /// The geometric operator Gm of a solve (no ρ: every channel, emission and
@@ -355,6 +421,10 @@ pub enum GeometricOperator {
     Dense(DenseMatrix),
     /// The hierarchical matrix.
     Compressed(HMatrix),
+    /// This rank's share of the hierarchical matrix's rows, in a solve
+    /// spread over ranks: as an operator, it maps this rank's rows of x to
+    /// its rows of G x ([`RowShare`]).
+    Shared(RowShare),
 }
 
 impl GeometricOperator {
@@ -362,15 +432,23 @@ impl GeometricOperator {
     pub fn dense(&self) -> Option<&DenseMatrix> {
         match self {
             Self::Dense(m) => Some(m),
-            Self::Compressed(_) => None,
+            Self::Compressed(_) | Self::Shared(_) => None,
         }
     }
 
     /// The hierarchical matrix, when that is what is stored.
     pub fn compressed(&self) -> Option<&HMatrix> {
         match self {
-            Self::Dense(_) => None,
+            Self::Dense(_) | Self::Shared(_) => None,
             Self::Compressed(h) => Some(h),
+        }
+    }
+
+    /// This rank's share, in a solve spread over ranks.
+    pub fn shared(&self) -> Option<&RowShare> {
+        match self {
+            Self::Shared(s) => Some(s),
+            _ => None,
         }
     }
 
@@ -378,29 +456,37 @@ impl GeometricOperator {
     pub fn kind(&self) -> OperatorKind {
         match self {
             Self::Dense(_) => OperatorKind::Dense,
-            Self::Compressed(_) => OperatorKind::Compressed,
+            Self::Compressed(_) | Self::Shared(_) => OperatorKind::Compressed,
         }
     }
 
-    /// What the hierarchical matrix holds (None when dense).
+    /// What the hierarchical matrix holds (None when dense; of a share,
+    /// this rank's leaves).
     pub fn stats(&self) -> Option<HStats> {
-        self.compressed().map(HMatrix::stats)
+        match self {
+            Self::Dense(_) => None,
+            Self::Compressed(h) => Some(h.stats()),
+            Self::Shared(s) => Some(s.local().stats()),
+        }
     }
 
-    /// Bytes of the stored numbers.
+    /// Bytes of the stored numbers (of a share, this rank's).
     pub fn heap_bytes(&self) -> u64 {
         match self {
             Self::Dense(m) => 8 * (m.nrows() * m.ncols()) as u64,
             Self::Compressed(h) => h.heap_bytes(),
+            Self::Shared(s) => s.local().heap_bytes(),
         }
     }
 }
 
 impl LinearOperator for GeometricOperator {
+    /// Of a share, this rank's rows.
     fn dim(&self) -> usize {
         match self {
             Self::Dense(m) => m.dim(),
             Self::Compressed(h) => h.dim(),
+            Self::Shared(s) => s.dim(),
         }
     }
 
@@ -408,6 +494,7 @@ impl LinearOperator for GeometricOperator {
         match self {
             Self::Dense(m) => m.apply(x, y),
             Self::Compressed(h) => h.apply(x, y),
+            Self::Shared(s) => s.apply(x, y),
         }
     }
 
@@ -415,6 +502,7 @@ impl LinearOperator for GeometricOperator {
         match self {
             Self::Dense(m) => m.apply_many(xs, ys),
             Self::Compressed(h) => h.apply_many(xs, ys),
+            Self::Shared(s) => s.apply_many(xs, ys),
         }
     }
 }

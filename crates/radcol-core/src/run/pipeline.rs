@@ -125,13 +125,8 @@ fn assemble(
     let dense_previous = previous.and_then(|p| p.outcome.operator.dense());
     let (operator, kernel_evals, device_seconds, info) = if compressed {
         let reuse = previous.and_then(|p| Some((p.outcome.operator.compressed()?, &*p.unchanged)));
-        let (h, evals) = build_compressed(&plan, cfg, reuse, &mut decision, &mut memory)?;
-        (
-            GeometricOperator::Compressed(h),
-            evals,
-            None,
-            CpuBackend.info(),
-        )
+        let (operator, evals) = build_compressed(&plan, cfg, reuse, &mut decision, &mut memory)?;
+        (operator, evals, None, CpuBackend.info())
     } else {
         let assembled = match dense_previous {
             Some(m) => backend.assemble_reusing(&plan, m)?,

@@ -13,7 +13,9 @@ use crate::norms::error_norms;
 use crate::problem::Problem;
 use crate::progress::solve_decades;
 use crate::solution::{integrate_nodal, Solution};
-use crate::solve::{gmres_radiosity, DenseLu, RadiosityOperator, RadiositySystem};
+use crate::solve::{
+    gmres_radiosity_reduced, Alone, DenseLu, RadiosityOperator, RadiositySystem, Reduce,
+};
 use std::ops::ControlFlow;
 use std::sync::Arc;
 
@@ -160,15 +162,41 @@ impl<'a> Relighter<'a> {
     ) -> Result<Vec<SolverReport>, Error> {
         let progress = self.cfg.progress.as_ref();
         let mut shown = vec![0u64; fields.len()];
-        let mut systems: Vec<RadiositySystem> = fields
-            .iter()
-            .zip(xs.iter_mut())
-            .map(|((rho, b), x)| RadiositySystem { rho, b, x })
-            .collect();
-        let results = gmres_radiosity(
+        // Spread over ranks: every system restricted to this rank's rows,
+        // solved together, and gathered whole again on every rank.
+        let share = self.operator.shared();
+        let local: Option<Vec<[Vec<f64>; 3]>> = share.map(|s| {
+            fields
+                .iter()
+                .zip(xs.iter())
+                .map(|((rho, b), x)| [s.restrict(rho), s.restrict(b), s.restrict(x)])
+                .collect()
+        });
+        let mut local_x: Vec<Vec<f64>> = local
+            .as_ref()
+            .map(|l| l.iter().map(|[_, _, x]| x.clone()).collect())
+            .unwrap_or_default();
+        let mut systems: Vec<RadiositySystem> = match &local {
+            Some(l) => l
+                .iter()
+                .zip(local_x.iter_mut())
+                .map(|([rho, b, _], x)| RadiositySystem { rho, b, x })
+                .collect(),
+            None => fields
+                .iter()
+                .zip(xs.iter_mut())
+                .map(|((rho, b), x)| RadiositySystem { rho, b, x })
+                .collect(),
+        };
+        let reduce: &dyn Reduce = match share {
+            Some(s) => s.ranks(),
+            None => &Alone,
+        };
+        let results = gmres_radiosity_reduced(
             self.operator,
             &mut systems,
             &self.cfg.gmres,
+            reduce,
             &mut |c, _, residual| {
                 let Some(p) = progress else {
                     return ControlFlow::Continue(());
@@ -189,6 +217,12 @@ impl<'a> Relighter<'a> {
                 }
             },
         );
+        drop(systems);
+        if let Some(s) = share {
+            for (x, local) in xs.iter_mut().zip(&local_x) {
+                s.gather(local, x);
+            }
+        }
         let mut reports = Vec::new();
         for (result, shown) in results.into_iter().zip(shown) {
             let info = match result {

@@ -7,7 +7,7 @@
 //! relight cost about one channel's memory traffic.
 
 use super::gmres::{Krylov, Started};
-use super::{GmresInfo, GmresParams, LinearOperator, SolveError};
+use super::{Alone, GmresInfo, GmresParams, LinearOperator, Reduce, SolveError};
 use rayon::prelude::*;
 use std::ops::ControlFlow;
 
@@ -36,10 +36,27 @@ pub struct RadiositySystem<'a> {
 ///
 /// One result per system, in order. A system's `rho` of the wrong length is
 /// its own [`SolveError::DimensionMismatch`].
+#[cfg(any(test, feature = "internals"))]
 pub fn gmres_radiosity(
     g: &dyn LinearOperator,
     systems: &mut [RadiositySystem<'_>],
     params: &GmresParams,
+    observe: &mut dyn FnMut(usize, usize, f64) -> ControlFlow<()>,
+) -> Vec<Result<GmresInfo, SolveError>> {
+    gmres_radiosity_reduced(g, systems, params, &Alone, observe)
+}
+
+/// [`gmres_radiosity`] on systems whose rows are spread over processes:
+/// `g` maps this process's rows of x to its rows of G x (gathering the
+/// rest itself), each system holds this process's rows of ρ, b and x, and
+/// `reduce` sums and maximises over the processes, which all call this
+/// together. Every process then runs the same iteration and reaches the
+/// same decisions.
+pub fn gmres_radiosity_reduced(
+    g: &dyn LinearOperator,
+    systems: &mut [RadiositySystem<'_>],
+    params: &GmresParams,
+    reduce: &dyn Reduce,
     observe: &mut dyn FnMut(usize, usize, f64) -> ControlFlow<()>,
 ) -> Vec<Result<GmresInfo, SolveError>> {
     let n = g.dim();
@@ -47,7 +64,7 @@ pub fn gmres_radiosity(
     let mut running: Vec<(usize, Box<Krylov<'_>>)> = Vec::new();
     for (c, s) in systems.iter_mut().enumerate() {
         let started = if s.rho.len() == n {
-            Krylov::start(n, s.b, s.x, params)
+            Krylov::start(n, s.b, s.x, params, reduce)
         } else {
             Err(SolveError::DimensionMismatch {
                 expected: n,

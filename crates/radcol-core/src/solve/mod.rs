@@ -18,12 +18,65 @@ mod residual;
 pub use gmres::{GmresInfo, GmresParams};
 #[cfg(any(test, feature = "internals"))]
 pub use gmres::{gmres, gmres_observed};
-pub use lockstep::{gmres_radiosity, RadiositySystem};
+#[cfg(any(test, feature = "internals"))]
+pub use lockstep::gmres_radiosity;
+pub use lockstep::{gmres_radiosity_reduced, RadiositySystem};
 pub use lu::DenseLu;
 pub use residual::true_residual;
 
 use crate::matrix::{dot, dots, DenseMatrix};
 use rayon::prelude::*;
+
+/// Sums and maxima over the processes that each hold some of the rows of
+/// GMRES's vectors (the ranks of a distributed solve: `crate::ranks`).
+/// [`Alone`] is one process holding them all. Every process must call the
+/// same reductions in the same order; GMRES does, since each of its
+/// decisions is taken on reduced values.
+pub trait Reduce: Sync {
+    /// Each `v[i]` replaced by its sum over the processes.
+    fn sum(&self, v: &mut [f64]);
+    /// Each `v[i]` replaced by its maximum over the processes.
+    fn max(&self, v: &mut [f64]);
+}
+
+/// One process, holding every row: reductions leave values as they are.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Alone;
+
+impl Reduce for Alone {
+    fn sum(&self, _: &mut [f64]) {}
+    fn max(&self, _: &mut [f64]) {}
+}
+
+impl dyn Reduce + '_ {
+    /// The dot product of two distributed vectors (local parts `a`, `b`).
+    fn dot(&self, a: &[f64], b: &[f64]) -> f64 {
+        let mut d = [dot(a, b)];
+        self.sum(&mut d);
+        d[0]
+    }
+
+    /// True on every process when `local` is true on any.
+    fn any(&self, local: bool) -> bool {
+        let mut v = [f64::from(u8::from(local))];
+        self.max(&mut v);
+        v[0] > 0.0
+    }
+
+    /// The largest |v_i| over every process's part of `v`.
+    fn max_abs(&self, v: &[f64]) -> f64 {
+        let mut m = [max_abs(v)];
+        self.max(&mut m);
+        m[0]
+    }
+
+    /// The total of a count held per process.
+    fn total(&self, n: usize) -> usize {
+        let mut t = [n as f64];
+        self.sum(&mut t);
+        t[0] as usize
+    }
+}
 
 /// A square linear operator `y = A x` (dense, matrix-free or GPU-backed).
 pub trait LinearOperator: Sync {

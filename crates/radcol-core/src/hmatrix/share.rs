@@ -1,0 +1,264 @@
+//! A hierarchical matrix spread over ranks by block rows: every rank
+//! builds the same cluster and block trees, cuts the row order into one
+//! contiguous range per rank, balanced by predicted cost, and computes and
+//! stores only the leaves whose rows meet its range ([`RowShare`]). A
+//! product gathers x from every rank's rows and multiplies the leaves held:
+//! the assembly needs no communication, a product one gather of x.
+
+use super::cluster::ClusterTree;
+use super::{Entries, HMatrix, HOptions, SampledSize};
+use crate::ranks::Ranks;
+use crate::solve::LinearOperator;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// The rank counted for a low-rank block before it is computed, in the
+/// cost of its rows: about what radiosity's far blocks keep at the
+/// default tolerance (ranks 2–12 on the Cornell box at 1e-8).
+const NOMINAL_RANK: f64 = 8.0;
+
+/// Where the row order is cut among `size` ranks: `size + 1` positions,
+/// from 0 to the number of rows, rank p holding `cuts[p]..cuts[p + 1]`.
+/// Each block's predicted cost (a dense leaf its entries, a low-rank block
+/// [`NOMINAL_RANK`] (m + n), a zero block nothing) is spread evenly over
+/// its rows, and the cuts fall on the starts of the row tree's leaves
+/// nearest to equal shares of the total, so that a dense leaf is never
+/// split and only low-rank blocks of large clusters straddle a cut (their
+/// rank on each side computes them whole and keeps them).
+pub(super) fn cuts(
+    rt: &ClusterTree,
+    ct: &ClusterTree,
+    blocks: &[(usize, usize, bool)],
+    zero: &[bool],
+    size: usize,
+) -> Vec<usize> {
+    let m = rt.order.len();
+    // Cost per row as a difference array of densities.
+    let mut density = vec![0.0; m + 1];
+    for (&(r, c, admissible), &z) in blocks.iter().zip(zero) {
+        let (rc, cc) = (&rt.clusters[r], &ct.clusters[c]);
+        let (rows, cols) = (rc.len() as f64, cc.len() as f64);
+        let cost = match (z, admissible) {
+            (true, _) => 0.0,
+            (false, true) => NOMINAL_RANK * (rows + cols),
+            (false, false) => rows * cols,
+        };
+        density[rc.start] += cost / rows;
+        density[rc.end] -= cost / rows;
+    }
+    // Cumulative cost before each row.
+    let mut before = vec![0.0; m + 1];
+    let mut d = 0.0;
+    for i in 0..m {
+        d += density[i];
+        before[i + 1] = before[i] + d;
+    }
+    let total = before[m];
+    let mut starts: Vec<usize> = rt
+        .clusters
+        .iter()
+        .filter(|c| c.children.is_none() && c.len() > 0)
+        .map(|c| c.start)
+        .chain([m])
+        .collect();
+    starts.sort_unstable();
+    starts.dedup();
+    let mut cuts = vec![0];
+    for p in 1..size {
+        let target = total * p as f64 / size as f64;
+        let last = *cuts.last().expect("starts at 0");
+        let best = starts
+            .iter()
+            .copied()
+            .filter(|&s| s >= last)
+            .min_by(|&a, &b| {
+                (before[a] - target)
+                    .abs()
+                    .total_cmp(&(before[b] - target).abs())
+            })
+            .unwrap_or(m);
+        cuts.push(best);
+    }
+    cuts.push(m);
+    cuts
+}
+
+/// One rank's share of a hierarchical matrix's rows, as an operator on
+/// that rank's rows: [`LinearOperator::apply`] takes this rank's rows of x
+/// (every rank calling it together), gathers the others', and returns
+/// this rank's rows of A x.
+#[derive(Debug)]
+pub struct RowShare {
+    h: HMatrix,
+    /// Original indices of the rows held, in row-tree order.
+    rows: Vec<usize>,
+    /// Rows held by each rank.
+    counts: Vec<usize>,
+    ranks: Arc<dyn Ranks>,
+    /// Time in this rank's leaf products.
+    product_nanos: AtomicU64,
+}
+
+impl RowShare {
+    /// This rank's share (of `ranks`) of the matrix
+    /// [`HMatrix::build_checked`] builds from the same arguments, with
+    /// `check` seeing the share's predicted size (its own memory). Every
+    /// rank must call it with the same arguments.
+    ///
+    /// # Errors
+    /// What `check` returns.
+    pub fn build<E>(
+        row_boxes: &[super::cluster::Aabb],
+        col_boxes: &[super::cluster::Aabb],
+        entries: &dyn Entries,
+        opts: &HOptions,
+        ranks: Arc<dyn Ranks>,
+        check: impl FnOnce(&SampledSize) -> Result<(), E>,
+    ) -> Result<(Self, SampledSize), E> {
+        let share = Some((ranks.rank(), ranks.size()));
+        let (h, size) =
+            HMatrix::build_part(row_boxes, col_boxes, entries, opts, None, share, check)?;
+        let rows = h.rt.order[h.held.clone()].to_vec();
+        let counts = ranks
+            .gather_each(rows.len() as f64)
+            .into_iter()
+            .map(|c| c as usize)
+            .collect();
+        Ok((
+            Self {
+                h,
+                rows,
+                counts,
+                ranks,
+                product_nanos: AtomicU64::new(0),
+            },
+            size,
+        ))
+    }
+
+    /// The leaves this rank holds (their stats and bytes are this rank's).
+    pub fn local(&self) -> &HMatrix {
+        &self.h
+    }
+
+    /// Original indices of this rank's rows, in the order of its vectors.
+    pub fn rows(&self) -> &[usize] {
+        &self.rows
+    }
+
+    /// Rows held by each rank.
+    pub fn counts(&self) -> &[usize] {
+        &self.counts
+    }
+
+    /// The ranks it is spread over.
+    pub fn ranks(&self) -> &dyn Ranks {
+        &*self.ranks
+    }
+
+    /// Seconds this rank has spent multiplying its leaves.
+    pub fn product_seconds(&self) -> f64 {
+        self.product_nanos.load(Ordering::Relaxed) as f64 * 1e-9
+    }
+
+    /// This rank's rows of a vector every rank holds whole.
+    pub fn restrict(&self, full: &[f64]) -> Vec<f64> {
+        self.rows.iter().map(|&i| full[i]).collect()
+    }
+
+    /// The whole vector from every rank's rows (`local`: this rank's), on
+    /// every rank; every rank calls it together.
+    pub fn gather(&self, local: &[f64], full: &mut [f64]) {
+        let m = self.h.stats.shape.0;
+        let mut tree = vec![0.0; m];
+        self.ranks.gather_all(local, &self.counts, &mut tree);
+        for (p, &i) in self.h.rt.order.iter().enumerate() {
+            full[i] = tree[p];
+        }
+    }
+
+    /// The relative error of a product over `rows` sample rows of the
+    /// whole matrix, as [`HMatrix::sampled_error`] measures it: each rank
+    /// checks the sample rows it holds, the sums are taken over the ranks
+    /// (every rank calls it together).
+    pub fn sampled_error(&self, entries: &dyn Entries, rows: usize) -> f64 {
+        let (m, n) = self.h.stats.shape;
+        let golden = |k: usize| ((k as f64 + 1.0) * 0.618_033_988_749_895).fract();
+        let x: Vec<f64> = (0..n).map(golden).collect();
+        let yp = self.h.products(&[&x]);
+        let held = self.h.held.clone();
+        let mut picked: Vec<usize> = (0..rows.min(m))
+            .map(|k| ((golden(k) * m as f64) as usize).min(m - 1))
+            .collect();
+        picked.sort_unstable();
+        picked.dedup();
+        let cols: Vec<usize> = (0..n).collect();
+        let (num, den) = picked
+            .par_iter()
+            .map(|&i| {
+                // Row i of the original order, at its position in the tree.
+                let Some(p) = held.clone().find(|&p| self.h.rt.order[p] == i) else {
+                    return (0.0, 0.0);
+                };
+                let mut row = vec![0.0; n];
+                entries.block(&[i], &cols, &mut row);
+                let exact: f64 = row.iter().zip(&x).map(|(a, b)| a * b).sum();
+                ((yp[p] - exact).powi(2), exact * exact)
+            })
+            .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+        let mut sums = [num, den];
+        self.ranks.sum(&mut sums);
+        if sums[1] > 0.0 {
+            (sums[0] / sums[1]).sqrt()
+        } else {
+            sums[0].sqrt()
+        }
+    }
+}
+
+impl LinearOperator for RowShare {
+    /// This rank's rows.
+    fn dim(&self) -> usize {
+        self.rows.len()
+    }
+
+    fn apply(&self, x: &[f64], y: &mut [f64]) {
+        self.apply_many(&[x], &mut [y]);
+    }
+
+    /// One gather per vector, then one pass over the leaves held.
+    fn apply_many(&self, xs: &[&[f64]], ys: &mut [&mut [f64]]) {
+        let n = self.h.stats.shape.1;
+        let full: Vec<Vec<f64>> = xs
+            .iter()
+            .map(|x| {
+                let mut f = vec![0.0; n];
+                self.gather(x, &mut f);
+                f
+            })
+            .collect();
+        let start = Instant::now();
+        let refs: Vec<&[f64]> = full.iter().map(Vec::as_slice).collect();
+        let yp = self.h.products(&refs);
+        let m = self.h.stats.shape.0;
+        for (y, yp) in ys.iter_mut().zip(yp.chunks_exact(m.max(1))) {
+            y.copy_from_slice(&yp[self.h.held.clone()]);
+        }
+        self.product_nanos
+            .fetch_add(start.elapsed().as_nanos() as u64, Ordering::Relaxed);
+    }
+}
+
+impl Clone for RowShare {
+    fn clone(&self) -> Self {
+        Self {
+            h: self.h.clone(),
+            rows: self.rows.clone(),
+            counts: self.counts.clone(),
+            ranks: self.ranks.clone(),
+            product_nanos: AtomicU64::new(self.product_nanos.load(Ordering::Relaxed)),
+        }
+    }
+}

@@ -1,0 +1,46 @@
+//! The processes of a distributed solve ("ranks"): who this process is,
+//! how many there are, and the few collective operations a distributed
+//! solve needs. Every rank holds the scene, the mesh and the cluster trees
+//! (replicated, built deterministically); each assembles and stores only
+//! its share of the compressed operator's block rows
+//! (`crate::hmatrix::RowShare`), and GMRES runs on every rank's rows at
+//! once, its dot products summed over the ranks.
+//!
+//! [`Mpi`] (feature `mpi`) runs over MPI's world communicator through the
+//! `mpi` crate (rsmpi). [`Threads`] runs the same collectives between
+//! threads of one process, so that the distributed code paths are tested
+//! without an MPI installation.
+
+#[cfg(feature = "mpi")]
+mod mpi;
+mod threads;
+
+#[cfg(feature = "mpi")]
+pub use self::mpi::Mpi;
+pub use threads::Threads;
+
+pub use crate::solve::Reduce;
+
+/// The ranks of a distributed solve, seen from one of them. Every rank
+/// must call the same collective operations in the same order.
+pub trait Ranks: Reduce + Send + Sync + std::fmt::Debug {
+    /// This process's rank, 0-based.
+    fn rank(&self) -> usize;
+    /// How many ranks take part.
+    fn size(&self) -> usize;
+    /// Every rank's `local` (rank p's of length `counts[p]`), one after
+    /// the other in rank order, into `all` (of length the sum of `counts`).
+    fn gather_all(&self, local: &[f64], counts: &[usize], all: &mut [f64]);
+    /// Seconds this rank has spent in collective operations so far,
+    /// waiting for the other ranks included.
+    fn seconds(&self) -> f64;
+}
+
+impl dyn Ranks + '_ {
+    /// One number from every rank, in rank order.
+    pub fn gather_each(&self, value: f64) -> Vec<f64> {
+        let mut all = vec![0.0; self.size()];
+        self.gather_all(&[value], &vec![1; self.size()], &mut all);
+        all
+    }
+}

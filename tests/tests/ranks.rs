@@ -1,0 +1,134 @@
+//! A solve spread over ranks (`radcol_core::ranks`) gives the one-process
+//! solve's answer: the compressed operator's rows shared among 2 and 3
+//! ranks (threads of this process exchanging through shared memory, the
+//! same collectives MPI runs in `radcol-cli`'s `mpi` tests), GMRES's dot
+//! products summed over them. Compared at every node of every channel with
+//! the one-process compressed solve: the same values to 1e-10 of the
+//! largest, the same GMRES iterations, each rank holding a share of the
+//! operator, and the shares adding up to the whole.
+
+use radcol_core::assembly::CpuBackend;
+use radcol_core::error::{Error, InputError};
+use radcol_core::hmatrix::HOptions;
+use radcol_core::problem::Problem;
+use radcol_core::ranks::{Ranks, Threads};
+use radcol_core::run::{solve, OperatorChoice, SolveConfig, SolveOutcome, SolverKind};
+use radcol_core::scene::builtin;
+use std::sync::Arc;
+
+fn config(ranks: Option<Arc<dyn Ranks>>) -> SolveConfig {
+    SolveConfig {
+        level: 0,
+        max_edge: Some(150.0),
+        operator: OperatorChoice::Compressed,
+        compression: HOptions {
+            tol: 1e-8,
+            ..SolveConfig::default().compression
+        },
+        estimate: false,
+        ranks,
+        ..Default::default()
+    }
+}
+
+/// Every rank's outcome of `cfg` (with its ranks set) over `size` threads.
+fn spread(problem: &Problem, size: usize, cfg: &SolveConfig) -> Vec<Result<SolveOutcome, Error>> {
+    std::thread::scope(|s| {
+        let handles: Vec<_> = Threads::new(size)
+            .into_iter()
+            .map(|rank| {
+                let cfg = SolveConfig {
+                    ranks: Some(Arc::new(rank) as Arc<dyn Ranks>),
+                    ..cfg.clone()
+                };
+                s.spawn(move || solve(problem, &cfg, &CpuBackend))
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    })
+}
+
+/// Max over nodes and channels of |a − b| relative to max |b|.
+fn max_rel(a: &SolveOutcome, b: &SolveOutcome) -> f64 {
+    let mut worst = 0.0f64;
+    for (ca, cb) in a.channels.iter().zip(&b.channels) {
+        let (ua, ub) = (ca.solution.nodal(), cb.solution.nodal());
+        let scale = ub.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (x, y) in ua.iter().zip(ub) {
+            worst = worst.max((x - y).abs() / scale);
+        }
+    }
+    worst
+}
+
+#[test]
+fn shared_rows_give_the_one_process_solution() {
+    let problem = builtin("cornell").unwrap().unwrap().problem();
+    let alone = solve(&problem, &config(None), &CpuBackend).unwrap();
+    let whole = alone.operator.stats().unwrap();
+    println!(
+        "one process: {} unknowns, {} numbers stored",
+        alone.discretization.len(),
+        whole.stored
+    );
+    for size in [2, 3] {
+        let outs: Vec<SolveOutcome> = spread(&problem, size, &config(None))
+            .into_iter()
+            .map(Result::unwrap)
+            .collect();
+        let mut stored = 0;
+        for (rank, out) in outs.iter().enumerate() {
+            let share = out.operator.shared().expect("a share of the rows");
+            assert_eq!((share.ranks().rank(), share.ranks().size()), (rank, size));
+            let held = share.local().stats().stored;
+            stored += held;
+            let diff = max_rel(out, &alone);
+            let iters: Vec<usize> = out.channels.iter().map(|c| c.solver.iterations).collect();
+            let alone_iters: Vec<usize> =
+                alone.channels.iter().map(|c| c.solver.iterations).collect();
+            println!(
+                "{size} ranks, rank {rank}: {} rows, {held} numbers ({:.1} %), max |Δu| / max |u| = {diff:.1e}, iterations {iters:?}",
+                share.rows().len(),
+                100.0 * held as f64 / whole.stored as f64
+            );
+            assert!(diff <= 1e-10, "rank {rank} of {size}: {diff:e}");
+            assert_eq!(iters, alone_iters, "rank {rank} of {size}");
+            assert!(
+                (held as f64) < 0.8 * whole.stored as f64,
+                "rank {rank} of {size} holds {held} of {}",
+                whole.stored
+            );
+        }
+        // Leaves that straddle a cut are held on both sides: never fewer
+        // numbers than the whole, a few more.
+        assert!(
+            stored >= whole.stored && (stored as f64) < 1.1 * whole.stored as f64,
+            "{stored} against {}",
+            whole.stored
+        );
+    }
+}
+
+#[test]
+fn a_spread_solve_refuses_the_dense_operator_and_lu() {
+    let problem = builtin("cornell").unwrap().unwrap().problem();
+    for cfg in [
+        SolveConfig {
+            operator: OperatorChoice::Dense,
+            ..config(None)
+        },
+        SolveConfig {
+            operator: OperatorChoice::Auto,
+            solver: SolverKind::Lu,
+            ..config(None)
+        },
+    ] {
+        for out in spread(&problem, 2, &cfg) {
+            let err = out.unwrap_err();
+            assert!(
+                matches!(err, Error::Input(InputError::NotDistributed { ranks: 2 })),
+                "{err}"
+            );
+        }
+    }
+}
