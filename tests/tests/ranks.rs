@@ -109,6 +109,75 @@ fn shared_rows_give_the_one_process_solution() {
     }
 }
 
+/// With the estimate (its check rows spread over the ranks too): the
+/// same element figures as one process, to 1e-10 of the largest.
+#[test]
+fn a_spread_estimate_gives_the_one_process_figures() {
+    let problem = builtin("cornell").unwrap().unwrap().problem();
+    let cfg = SolveConfig {
+        estimate: true,
+        max_edge: Some(250.0),
+        ..config(None)
+    };
+    let alone = solve(&problem, &cfg, &CpuBackend).unwrap();
+    for out in spread(&problem, 3, &cfg) {
+        let out = out.unwrap();
+        for (a, b) in out.channels.iter().zip(&alone.channels) {
+            let (a, b) = (a.estimate.as_ref().unwrap(), b.estimate.as_ref().unwrap());
+            let worst = a
+                .elements
+                .iter()
+                .zip(&b.elements)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
+            assert!(worst <= 1e-10 * b.max, "{worst:e} of {:e}", b.max);
+            assert!((a.max - b.max).abs() <= 1e-10 * b.max);
+        }
+    }
+}
+
+/// The adaptive loop over ranks (each step's operator and estimate
+/// shared, marking and stopping on every rank alike): the same steps,
+/// unknowns and final solution as one process.
+#[test]
+fn a_spread_adaptive_loop_takes_the_one_process_steps() {
+    use radcol_core::run::adapt::{solve_adaptive, AdaptOptions, AdaptOutcome};
+    let problem = builtin("shadow").unwrap().unwrap().problem();
+    let cfg = SolveConfig {
+        estimate: true,
+        max_edge: None,
+        ..config(None)
+    };
+    let opts = AdaptOptions {
+        target: 1e-2,
+        ..Default::default()
+    };
+    let run = |cfg: &SolveConfig| solve_adaptive(&problem, cfg, &opts, &CpuBackend, |_| {});
+    let unknowns = |r: &AdaptOutcome| r.steps.iter().map(|s| s.unknowns).collect::<Vec<_>>();
+    let alone = run(&cfg).unwrap();
+    println!("one process: steps {:?}", unknowns(&alone));
+    assert!(alone.steps.len() >= 3, "{:?}", unknowns(&alone));
+    let outs: Vec<AdaptOutcome> = std::thread::scope(|s| {
+        let handles: Vec<_> = Threads::new(2)
+            .into_iter()
+            .map(|rank| {
+                let cfg = SolveConfig {
+                    ranks: Some(Arc::new(rank) as Arc<dyn Ranks>),
+                    ..cfg.clone()
+                };
+                s.spawn(move || run(&cfg).unwrap())
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    for out in &outs {
+        assert_eq!(unknowns(out), unknowns(&alone));
+        assert_eq!(out.stop, alone.stop);
+        let diff = max_rel(&out.outcome, &alone.outcome);
+        assert!(diff <= 1e-10, "{diff:e}");
+    }
+}
+
 #[test]
 fn a_spread_solve_refuses_the_dense_operator_and_lu() {
     let problem = builtin("cornell").unwrap().unwrap().problem();

@@ -210,7 +210,7 @@ pub enum InputError {
         ranks: usize,
     },
     /// Fewer rows than ranks to share them.
-    #[error("{unknowns} unknowns are too few to share among {ranks} ranks (each needs at least one leaf of the cluster tree); use fewer ranks or a finer mesh")]
+    #[error("{unknowns} unknowns are too few to share among {ranks} ranks (each needs at least one row); use fewer ranks or a finer mesh")]
     TooFewRows {
         /// Unknowns of the mesh.
         unknowns: usize,

@@ -34,6 +34,7 @@ use crate::discretization::Discretization;
 use crate::nodes::{NodeSet, MAX_DEGREE};
 use crate::norms::LATTICE;
 use crate::quadrature::RuleLadder;
+use crate::ranks::Ranks;
 use crate::solution::Solution;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -289,11 +290,36 @@ pub struct ChannelFields<'a> {
 /// to the check points ([`AssemblyPlan::at_points`] with the
 /// [`check_nodes`] on the solutions' mesh), filled and contracted one row
 /// block at a time (memory O(f·N)).
+#[cfg(any(test, feature = "internals"))]
 pub fn estimate(check: &AssemblyPlan, channels: &[ChannelFields<'_>]) -> Vec<ErrorEstimate> {
+    estimate_shared(check, channels, None)
+}
+
+/// [`estimate`], its check rows spread over `ranks` when given: each rank
+/// fills and contracts the rows of a contiguous range of elements (equal
+/// shares of the check rows), and K u_n at the check points is gathered
+/// whole on every rank before the summaries, which every rank computes
+/// alike. Every rank calls it together.
+pub fn estimate_shared(
+    check: &AssemblyPlan,
+    channels: &[ChannelFields<'_>],
+    ranks: Option<&dyn Ranks>,
+) -> Vec<ErrorEstimate> {
     let rows = check.rows();
     let ncols = check.dim();
     let n = rows.mesh().len();
-    let blocks = (0..n)
+    let (size, rank) = ranks.map_or((1, 0), |r| (r.size(), r.rank()));
+    // Element ranges of equal shares of the check rows.
+    let mut cuts = vec![0];
+    let per = rows.len().div_ceil(size.max(1));
+    for k in 0..n {
+        if rows.offset(k) >= per * cuts.len() && cuts.len() < size {
+            cuts.push(k);
+        }
+    }
+    cuts.resize(size + 1, n);
+    let mine = cuts[rank]..cuts[rank + 1];
+    let blocks = mine
         .into_par_iter()
         .map_init(Vec::new, |block, kp| {
             let fc = rows.nodes_per(kp);
@@ -302,7 +328,19 @@ pub fn estimate(check: &AssemblyPlan, channels: &[ChannelFields<'_>]) -> Vec<Err
             contract(&block[..fc * ncols], fc, ncols, channels)
         })
         .collect();
-    summaries(check, channels, by_channel(blocks, channels.len()))
+    let mut ku = by_channel(blocks, channels.len());
+    if let Some(ranks) = ranks.filter(|r| r.size() > 1) {
+        let counts: Vec<usize> = cuts
+            .windows(2)
+            .map(|w| rows.range_of(w[0]..w[1]).len())
+            .collect();
+        for local in &mut ku {
+            let mut all = vec![0.0; rows.len()];
+            ranks.gather_all(local, &counts, &mut all);
+            *local = all;
+        }
+    }
+    summaries(check, channels, ku)
 }
 
 /// Per channel, the values of every element's `blocks` (channel-major

@@ -26,7 +26,8 @@ const NOMINAL_RANK: f64 = 8.0;
 /// its rows, and the cuts fall on the starts of the row tree's leaves
 /// nearest to equal shares of the total, so that a dense leaf is never
 /// split and only low-rank blocks of large clusters straddle a cut (their
-/// rank on each side computes them whole and keeps them).
+/// rank on each side computes them whole and keeps them); with fewer
+/// leaves than ranks, on any row.
 pub(super) fn cuts(
     rt: &ClusterTree,
     ct: &ClusterTree,
@@ -65,6 +66,10 @@ pub(super) fn cuts(
         .collect();
     starts.sort_unstable();
     starts.dedup();
+    // Fewer leaves than ranks (a mesh of a few dozen unknowns): any row.
+    if starts.len() <= size {
+        starts = (0..=m).collect();
+    }
     let mut cuts = vec![0];
     for p in 1..size {
         let target = total * p as f64 / size as f64;

@@ -14,7 +14,7 @@ use crate::assembly::{AssemblyBackend, AssemblyPlan, BackendInfo, CpuBackend, Un
 use crate::discretization::Discretization;
 use crate::error::Error;
 use crate::estimate::{
-    check_discretization, estimate, estimate_updated, ChannelFields, ErrorEstimate,
+    check_discretization, estimate_shared, estimate_updated, ChannelFields, ErrorEstimate,
     ESTIMATE_QUAD_TOL,
 };
 use crate::mesh::Mesh;
@@ -236,7 +236,8 @@ fn estimate_channels(
     let updated = previous
         .zip(guess)
         .and_then(|(p, g)| update(&plan, &inputs, p, g));
-    let mut estimates = updated.unwrap_or_else(|| estimate(&plan, &inputs));
+    let ranks = cfg.distributed().map(|r| &**r);
+    let mut estimates = updated.unwrap_or_else(|| estimate_shared(&plan, &inputs, ranks));
     // Shadows of the direct light between an element's check points.
     let found = probes::find(square, &check, &probes::emitting(disc, channels));
     probes::apply(

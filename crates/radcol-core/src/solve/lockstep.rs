@@ -7,7 +7,7 @@
 //! relight cost about one channel's memory traffic.
 
 use super::gmres::{Krylov, Started};
-use super::{Alone, GmresInfo, GmresParams, LinearOperator, Reduce, SolveError};
+use super::{GmresInfo, GmresParams, LinearOperator, Reduce, SolveError};
 use rayon::prelude::*;
 use std::ops::ControlFlow;
 
@@ -43,7 +43,7 @@ pub fn gmres_radiosity(
     params: &GmresParams,
     observe: &mut dyn FnMut(usize, usize, f64) -> ControlFlow<()>,
 ) -> Vec<Result<GmresInfo, SolveError>> {
-    gmres_radiosity_reduced(g, systems, params, &Alone, observe)
+    gmres_radiosity_reduced(g, systems, params, &super::Alone, observe)
 }
 
 /// [`gmres_radiosity`] on systems whose rows are spread over processes:
