@@ -27,6 +27,7 @@ mod output;
 mod panics;
 mod plot;
 mod progress;
+mod ranks;
 mod report;
 mod run;
 mod scene;
@@ -50,10 +51,21 @@ fn main() -> ExitCode {
     // the exit code says how the run ended (128 + SIGINT's 2).
     let _ = ctrlc::set_handler(|| {
         files::remove_pending();
-        eprintln!("\ninterrupted: no output was left half-written");
+        // Under mpirun every rank gets the signal; rank 0 says so.
+        if ranks::lead() {
+            eprintln!("\ninterrupted: no output was left half-written");
+        }
         std::process::exit(130);
     });
-    let outcome = std::panic::catch_unwind(try_main);
+    // MPI before anything else (a world of one without mpirun).
+    let session = match ranks::Session::start() {
+        Ok(s) => s,
+        Err(why) => {
+            eprintln!("error: {why}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let outcome = std::panic::catch_unwind(|| try_main(&session));
     let err = match outcome {
         Ok(Ok(())) => return ExitCode::SUCCESS,
         Ok(Err(err)) => err,
@@ -63,8 +75,9 @@ fn main() -> ExitCode {
         return ExitCode::SUCCESS;
     }
     let _ = std::io::stdout().flush();
-    eprintln!("error: {}", error::one_line(&err));
-    ExitCode::from(error::exit_code(&err))
+    let code = error::exit_code(&err);
+    session.fail(&error::one_line(&err), code);
+    ExitCode::from(code)
 }
 
 /// Mesa's Vulkan drivers (probed by `--backend auto|gpu`) print "XDG_RUNTIME_DIR
@@ -92,7 +105,7 @@ fn ensure_runtime_dir() {
     }
 }
 
-fn try_main() -> anyhow::Result<()> {
+fn try_main(session: &ranks::Session) -> anyhow::Result<()> {
     let cli = match args::Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => match e.kind() {
@@ -109,7 +122,13 @@ fn try_main() -> anyhow::Result<()> {
             _ => return Err(error::bad_input(error::clap_one_line(&e)).into()),
         },
     };
-    progress::set_quiet(cli.quiet);
+    if ranks::current().is_some() && !matches!(cli.command, args::Command::Solve(_)) {
+        return Err(error::bad_input(
+            "under mpirun only `radcol solve` runs across ranks; run the other commands as one process",
+        )
+        .into());
+    }
+    progress::set_quiet(cli.quiet || !ranks::lead());
     progress::set_verbose(cli.verbose);
     if let Some(n) = cli.threads {
         // Each thread holds its own row blocks and stack: tens of thousands
@@ -127,6 +146,13 @@ fn try_main() -> anyhow::Result<()> {
             .num_threads(n.into())
             .build_global()
             .map_err(|e| error::bad_input(format!("--threads {n}: {e}")))?;
+    } else if session.local_size() > 1 {
+        // Ranks sharing this machine share its cores.
+        let cpus = std::thread::available_parallelism().map_or(1, |c| c.get());
+        rayon::ThreadPoolBuilder::new()
+            .num_threads((cpus / session.local_size()).max(1))
+            .build_global()
+            .map_err(|e| anyhow::anyhow!("the thread pool: {e}"))?;
     }
     run::run(validate::Config::from_cli(cli)?)
 }

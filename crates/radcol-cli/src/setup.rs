@@ -83,7 +83,8 @@ impl std::fmt::Debug for Setup {
 /// report on stdout stays machine-readable).
 pub fn load(spec: &SceneSpec) -> Result<Loaded> {
     let loaded = spec.load()?;
-    if let Some(scene) = loaded.scene() {
+    // Under mpirun every rank loads the scene; rank 0 warns.
+    if let Some(scene) = loaded.scene().filter(|_| crate::ranks::lead()) {
         for w in &scene.warnings {
             eprintln!("warning: {}: {w}", scene.name);
         }
@@ -158,7 +159,7 @@ pub fn setup(
             problem
         }
     };
-    if loaded.scene().is_none() && !problem.emits() && !adaptive {
+    if loaded.scene().is_none() && !problem.emits() && !adaptive && crate::ranks::lead() {
         // A scene says so in its own warnings; an adaptive solve refuses.
         eprintln!(
             "warning: {}: the emission is zero: the solution is zero everywhere",
@@ -180,6 +181,7 @@ pub fn setup(
         estimate: p.estimate,
         limit_negative: p.limit_negative,
         progress: None,
+        ranks: None,
     };
     Ok(Setup {
         scene: surface.name.clone(),

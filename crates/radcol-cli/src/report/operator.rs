@@ -4,7 +4,8 @@
 
 use radcol_core::run::SAMPLED_ROWS;
 use radcol_core::run::{
-    HStats, MemoryUse, OperatorChoice, OperatorDecision, OperatorKind, SampledSize, SolveOutcome,
+    HStats, MemoryUse, OperatorChoice, OperatorDecision, OperatorKind, RanksReport, SampledSize,
+    SolveOutcome,
 };
 use serde::Serialize;
 use std::fmt;
@@ -29,6 +30,10 @@ pub struct OperatorReport {
     /// Its size as predicted from a sample of its admissible blocks, built
     /// first, before the others were computed.
     sampled_size: Option<SampledSize>,
+    /// Under mpirun: how many ranks ran, and what each held and spent
+    /// (`bytes` and `compression` above are rank 0's share).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    ranks: Option<RanksReport>,
 }
 
 impl OperatorReport {
@@ -43,6 +48,7 @@ impl OperatorReport {
             predicted_bytes: out.operator_decision.predicted_bytes,
             planned_bytes: out.operator_decision.planned_bytes,
             sampled_size: out.operator_decision.sampled_bytes,
+            ranks: out.ranks.clone(),
         }
     }
 }
@@ -66,8 +72,45 @@ fn gb(bytes: f64) -> String {
     format!("{:.3} GB", bytes / 1e9)
 }
 
+/// One line per rank of a distributed solve: rows, bytes, and seconds of
+/// assembly, block products and communication.
+fn fmt_ranks(f: &mut fmt::Formatter<'_>, r: &RanksReport) -> fmt::Result {
+    let total: u64 = r.per_rank.iter().map(|p| p.stored_bytes).sum();
+    writeln!(
+        f,
+        "  ranks       {} (the operator line is rank 0's share; all ranks together store {})",
+        r.size,
+        gb(total as f64)
+    )?;
+    for (k, p) in r.per_rank.iter().enumerate() {
+        let busy = p.products_s + p.communication_s;
+        writeln!(
+            f,
+            "    rank {k}    {} rows, {} ({:.1} %), assembly {:.2} s, products {:.2} s, communication {:.2} s ({:.0} % of products and communication)",
+            p.rows,
+            gb(p.stored_bytes as f64),
+            100.0 * p.stored_bytes as f64 / (total as f64).max(1.0),
+            p.assembly_s,
+            p.products_s,
+            p.communication_s,
+            if busy > 0.0 { 100.0 * p.communication_s / busy } else { 0.0 }
+        )?;
+    }
+    Ok(())
+}
+
 impl fmt::Display for OperatorReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.fmt_operator(f)?;
+        match &self.ranks {
+            Some(r) => fmt_ranks(f, r),
+            None => Ok(()),
+        }
+    }
+}
+
+impl OperatorReport {
+    fn fmt_operator(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match &self.compression {
             None => writeln!(
                 f,
@@ -99,6 +142,9 @@ impl fmt::Display for OperatorReport {
                 gb(self.predicted_bytes.unwrap_or(f64::NAN)),
                 match self.planned_bytes {
                     Some(b) => format!("{} from the plan", gb(b)),
+                    None if self.ranks.is_some() => {
+                        "not from the plan (each rank predicts its share from its sample)".into()
+                    }
                     None => "not from the plan (taken from the previous step)".into(),
                 },
                 match &self.sampled_size {

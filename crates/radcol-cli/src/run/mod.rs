@@ -80,7 +80,11 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
         })?;
         look.lightmap_atlas = Some(atlas);
     }
-    let bar = progress::Bar::for_stderr();
+    // Under mpirun, every rank solves together; rank 0 alone shows
+    // progress, evaluates points, writes and reports.
+    s.cfg.ranks = crate::ranks::current();
+    let lead = crate::ranks::lead();
+    let bar = progress::Bar::for_stderr().filter(|_| lead);
     s.cfg.progress = bar.as_ref().map(|b| b.handle());
     let (out, adaptive) = match &job.adapt {
         None => (
@@ -97,7 +101,9 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
                 s.backend.as_ref(),
                 |step| match &bar {
                     Some(b) => b.note(&AdaptLine(step).to_string()),
-                    None if !s.json && !progress::quiet() => eprintln!("{}", AdaptLine(step)),
+                    None if lead && !s.json && !progress::quiet() => {
+                        eprintln!("{}", AdaptLine(step))
+                    }
                     None => {}
                 },
             )
@@ -108,6 +114,9 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
         }
     };
     let sets = relight::relight_all(job.relight.iter().cloned().zip(relit).collect(), &s, &out)?;
+    if !lead {
+        return Ok(());
+    }
     let values = match &job.at {
         Some(at) => {
             if let Some(b) = &bar {

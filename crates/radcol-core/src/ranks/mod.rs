@@ -16,7 +16,7 @@ mod mpi;
 mod threads;
 
 #[cfg(feature = "mpi")]
-pub use self::mpi::Mpi;
+pub use self::mpi::{Mpi, MpiSession};
 pub use threads::Threads;
 
 pub use crate::solve::Reduce;

@@ -3,10 +3,97 @@
 use super::{Ranks, Reduce};
 use mpi::collective::SystemOperation;
 use mpi::datatype::PartitionMut;
+use mpi::environment::Universe;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::{Communicator, CommunicatorCollectives};
+use mpi::Threading;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
+
+/// MPI, initialised for as long as it lives (dropped: finalised), and this
+/// process's place in the world communicator.
+pub struct MpiSession {
+    _universe: Universe,
+    world: std::sync::Arc<Mpi>,
+    local: usize,
+}
+
+impl std::fmt::Debug for MpiSession {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MpiSession")
+            .field("world", &self.world)
+            .field("local", &self.local)
+            .finish_non_exhaustive()
+    }
+}
+
+impl MpiSession {
+    /// Initialises MPI (once per process), asking that any thread may call
+    /// it as long as calls do not overlap (`Threading::Serialized`). A
+    /// process started without `mpirun` is a world of one.
+    ///
+    /// # Errors
+    /// One line when MPI was initialised already, or cannot give that
+    /// level of thread support.
+    pub fn start() -> Result<Self, String> {
+        let (universe, level) = mpi::initialize_with_threading(Threading::Serialized)
+            .ok_or("MPI was initialised already in this process")?;
+        if level < Threading::Serialized {
+            return Err(format!(
+                "the MPI library offers thread support {level:?}; radcol needs Serialized"
+            ));
+        }
+        let local = universe.world().split_shared(0).size() as usize;
+        Ok(Self {
+            _universe: universe,
+            world: std::sync::Arc::new(Mpi::world()),
+            local,
+        })
+    }
+
+    /// This process among the world's ranks.
+    pub fn world(&self) -> std::sync::Arc<Mpi> {
+        self.world.clone()
+    }
+
+    /// Ranks on this machine (sharing its memory and cores), this one
+    /// included.
+    pub fn local_size(&self) -> usize {
+        self.local
+    }
+
+    /// Whether every rank of the world reaches this call within `wait`
+    /// (a non-blocking barrier, polled): when all fail alike (bad input
+    /// is the same on every rank), each can end by itself; when one fails
+    /// alone, the others are elsewhere and it must end them
+    /// ([`MpiSession::abort`]).
+    pub fn all_here(&self, wait: std::time::Duration) -> bool {
+        let start = Instant::now();
+        let mut request = SimpleCommunicator::world().immediate_barrier();
+        loop {
+            match request.test() {
+                Ok(_) => return true,
+                Err(pending) if start.elapsed() < wait => {
+                    request = pending;
+                    std::thread::sleep(std::time::Duration::from_millis(5));
+                }
+                Err(pending) => {
+                    // Never completed: the process is about to abort, and
+                    // dropping an incomplete request panics.
+                    std::mem::forget(pending);
+                    return false;
+                }
+            }
+        }
+    }
+
+    /// Ends every rank of the world at once with `code` (MPI_Abort): what a
+    /// rank that fails alone does, so that the others, waiting for it in a
+    /// collective operation, do not hang.
+    pub fn abort(&self, code: i32) -> ! {
+        SimpleCommunicator::world().abort(code)
+    }
+}
 
 /// This process among MPI's world communicator. MPI must have been
 /// initialised (`mpi::initialize_with_threading`, at least

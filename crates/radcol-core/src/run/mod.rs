@@ -60,7 +60,7 @@ pub use defaults::{
 pub use inputs::{check_size, discretize, MAX_EXTENT, MIN_EXTENT};
 pub use operator::SAMPLED_ROWS;
 pub use operator::{GeometricOperator, OperatorChoice, OperatorDecision, OperatorKind};
-pub use outcome::{ChannelResult, SolveOutcome, SolverReport, Timings};
+pub use outcome::{ChannelResult, RankFigures, RanksReport, SolveOutcome, SolverReport, Timings};
 pub use pipeline::{solve, solve_on_mesh};
 pub use relight::Relighter;
 pub use size::{

@@ -152,6 +152,59 @@ pub struct SolveOutcome {
     pub channels: Vec<ChannelResult>,
     /// Timings.
     pub timings: Timings,
+    /// In a solve spread over ranks, what each held and spent (the same on
+    /// every rank); None in one process.
+    pub ranks: Option<RanksReport>,
+}
+
+/// What each rank of a distributed solve held and spent, gathered at the
+/// end of the solve.
+#[derive(Clone, Debug, Serialize)]
+pub struct RanksReport {
+    /// How many ranks ran the solve.
+    pub size: usize,
+    /// Per rank, in rank order.
+    pub per_rank: Vec<RankFigures>,
+}
+
+/// One rank's share of a distributed solve.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct RankFigures {
+    /// Rows of the operator (unknowns) it held.
+    pub rows: usize,
+    /// Bytes of the operator's numbers it stored.
+    pub stored_bytes: u64,
+    /// Seconds of its assembly (plan and its share of the blocks).
+    pub assembly_s: f64,
+    /// Seconds multiplying its blocks in GMRES's products.
+    pub products_s: f64,
+    /// Seconds in collective operations since the process began (gathers
+    /// and reductions, waiting for the other ranks included).
+    pub communication_s: f64,
+}
+
+impl RanksReport {
+    /// Every rank's figures, gathered from each rank's own (every rank
+    /// calls it together).
+    pub(crate) fn gather(ranks: &dyn crate::ranks::Ranks, mine: RankFigures) -> Self {
+        let each = |v: f64| ranks.gather_each(v);
+        let (rows, stored) = (each(mine.rows as f64), each(mine.stored_bytes as f64));
+        let (assembly, products) = (each(mine.assembly_s), each(mine.products_s));
+        let communication = each(mine.communication_s);
+        let per_rank = (0..ranks.size())
+            .map(|p| RankFigures {
+                rows: rows[p] as usize,
+                stored_bytes: stored[p] as u64,
+                assembly_s: assembly[p],
+                products_s: products[p],
+                communication_s: communication[p],
+            })
+            .collect();
+        Self {
+            size: ranks.size(),
+            per_rank,
+        }
+    }
 }
 
 impl SolveOutcome {

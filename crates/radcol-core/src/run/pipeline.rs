@@ -424,7 +424,18 @@ impl Stages<'_> {
             channels.iter_mut().for_each(ChannelResult::limit_negative);
         }
 
+        let ranks = built.operator.shared().map(|s| {
+            let mine = super::RankFigures {
+                rows: s.rows().len(),
+                stored_bytes: s.local().heap_bytes(),
+                assembly_s,
+                products_s: s.product_seconds(),
+                communication_s: s.ranks().seconds(),
+            };
+            super::RanksReport::gather(s.ranks(), mine)
+        });
         let outcome = SolveOutcome {
+            ranks,
             h,
             backend: built.backend,
             plan: built.plan.stats(),
