@@ -80,7 +80,7 @@ fn shared_rows_give_the_one_process_solution() {
         for (rank, out) in outs.iter().enumerate() {
             let share = out.operator.shared().expect("a share of the rows");
             assert_eq!((share.ranks().rank(), share.ranks().size()), (rank, size));
-            let held = share.local().stats().stored;
+            let held = share.stats().stored;
             stored += held;
             let diff = max_rel(out, &alone);
             let iters: Vec<usize> = out.channels.iter().map(|c| c.solver.iterations).collect();

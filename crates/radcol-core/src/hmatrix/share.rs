@@ -60,7 +60,7 @@ pub(super) fn cuts(
     let mut starts: Vec<usize> = rt
         .clusters
         .iter()
-        .filter(|c| c.children.is_none() && c.len() > 0)
+        .filter(|c| c.children.is_none() && c.end > c.start)
         .map(|c| c.start)
         .chain([m])
         .collect();
@@ -91,7 +91,7 @@ pub(super) fn cuts(
 }
 
 /// One rank's share of a hierarchical matrix's rows, as an operator on
-/// that rank's rows: [`LinearOperator::apply`] takes this rank's rows of x
+/// that rank's rows: `LinearOperator::apply` takes this rank's rows of x
 /// (every rank calling it together), gathers the others', and returns
 /// this rank's rows of A x.
 #[derive(Debug)]
@@ -108,13 +108,13 @@ pub struct RowShare {
 
 impl RowShare {
     /// This rank's share (of `ranks`) of the matrix
-    /// [`HMatrix::build_checked`] builds from the same arguments, with
+    /// `HMatrix::build_checked` builds from the same arguments, with
     /// `check` seeing the share's predicted size (its own memory). Every
     /// rank must call it with the same arguments.
     ///
     /// # Errors
     /// What `check` returns.
-    pub fn build<E>(
+    pub(crate) fn build<E>(
         row_boxes: &[super::cluster::Aabb],
         col_boxes: &[super::cluster::Aabb],
         entries: &dyn Entries,
@@ -143,9 +143,20 @@ impl RowShare {
         ))
     }
 
-    /// The leaves this rank holds (their stats and bytes are this rank's).
-    pub fn local(&self) -> &HMatrix {
+    /// The leaves this rank holds.
+    pub(crate) fn local(&self) -> &HMatrix {
         &self.h
+    }
+
+    /// What this rank's leaves hold (its share of the numbers; the shape
+    /// is the whole matrix's).
+    pub fn stats(&self) -> super::HStats {
+        self.h.stats()
+    }
+
+    /// Heap bytes of this rank's share.
+    pub fn heap_bytes(&self) -> u64 {
+        self.h.heap_bytes()
     }
 
     /// Original indices of this rank's rows, in the order of its vectors.
@@ -185,10 +196,10 @@ impl RowShare {
     }
 
     /// The relative error of a product over `rows` sample rows of the
-    /// whole matrix, as [`HMatrix::sampled_error`] measures it: each rank
+    /// whole matrix, as `HMatrix::sampled_error` measures it: each rank
     /// checks the sample rows it holds, the sums are taken over the ranks
     /// (every rank calls it together).
-    pub fn sampled_error(&self, entries: &dyn Entries, rows: usize) -> f64 {
+    pub(crate) fn sampled_error(&self, entries: &dyn Entries, rows: usize) -> f64 {
         let (m, n) = self.h.stats.shape;
         let golden = |k: usize| ((k as f64 + 1.0) * 0.618_033_988_749_895).fract();
         let x: Vec<f64> = (0..n).map(golden).collect();

@@ -3,10 +3,10 @@
 //! solve needs. Every rank holds the scene, the mesh and the cluster trees
 //! (replicated, built deterministically); each assembles and stores only
 //! its share of the compressed operator's block rows
-//! (`crate::hmatrix::RowShare`), and GMRES runs on every rank's rows at
+//! (`crate::run::RowShare`), and GMRES runs on every rank's rows at
 //! once, its dot products summed over the ranks.
 //!
-//! [`Mpi`] (feature `mpi`) runs over MPI's world communicator through the
+//! `Mpi` (feature `mpi`) runs over MPI's world communicator through the
 //! `mpi` crate (rsmpi). [`Threads`] runs the same collectives between
 //! threads of one process, so that the distributed code paths are tested
 //! without an MPI installation.
@@ -19,7 +19,7 @@ mod threads;
 pub use self::mpi::{Mpi, MpiSession};
 pub use threads::Threads;
 
-pub use crate::solve::Reduce;
+pub use crate::solve::{Alone, Reduce};
 
 /// The ranks of a distributed solve, seen from one of them. Every rank
 /// must call the same collective operations in the same order.

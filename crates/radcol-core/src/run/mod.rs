@@ -38,7 +38,7 @@ pub use crate::error::{Error, FieldKind, FieldName, InputError};
 pub use crate::estimate::{ErrorEstimate, RelativeTo};
 pub use crate::geometry::{shapes, Surface};
 pub use crate::hmatrix::radiosity::predict as predict_compressed_from_geometry;
-pub use crate::hmatrix::{HOptions, HPrediction, HStats, SampledSize};
+pub use crate::hmatrix::{HOptions, HPrediction, HStats, RowShare, SampledSize};
 pub use crate::mesh::grading::{Grade, Grading, GRADE_RANGE};
 pub use crate::mesh::{Locator, Mesh, MAX_EDGE_COUNT_CAP};
 pub use crate::nodes::{check_alpha, check_degree, nodes_per_element, NodeSet};

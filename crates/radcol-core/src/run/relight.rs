@@ -151,9 +151,11 @@ impl<'a> Relighter<'a> {
         Ok(channels)
     }
 
-    /// GMRES on every channel at once ([`gmres_radiosity`]), each channel
-    /// reporting the decades its residual falls to `cfg.progress`
-    /// (`decades` per channel) and stopping when it asks.
+    /// GMRES on every channel at once ([`gmres_radiosity_reduced`]; in a
+    /// distributed solve on this rank's rows, reduced over the ranks, the
+    /// solutions gathered whole), each channel reporting the decades its
+    /// residual falls to `cfg.progress` (`decades` per channel) and
+    /// stopping when it asks.
     fn gmres_all(
         &self,
         fields: &[NodalFields],

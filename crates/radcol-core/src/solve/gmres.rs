@@ -146,7 +146,7 @@ pub(super) enum Started<'p> {
 
 /// One system's restarted GMRES(m), advanced one operator product at a
 /// time so that a driver can compute the products of several systems
-/// together ([`super::gmres_radiosity`]) or one by one ([`gmres_observed`]):
+/// together ([`super::gmres_radiosity_reduced`]) or one by one ([`gmres_observed`]):
 /// [`Krylov::product`] lends the vector to multiply and the place for its
 /// product, [`Krylov::advance`] takes the product and says whether the
 /// iteration is over.

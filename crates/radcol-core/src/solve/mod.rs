@@ -18,7 +18,7 @@ mod residual;
 pub use gmres::{GmresInfo, GmresParams};
 #[cfg(any(test, feature = "internals"))]
 pub use gmres::{gmres, gmres_observed};
-#[cfg(any(test, feature = "internals"))]
+#[cfg(feature = "internals")]
 pub use lockstep::gmres_radiosity;
 pub use lockstep::{gmres_radiosity_reduced, RadiositySystem};
 pub use lu::DenseLu;
