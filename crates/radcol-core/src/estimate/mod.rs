@@ -295,30 +295,22 @@ pub fn estimate(check: &AssemblyPlan, channels: &[ChannelFields<'_>]) -> Vec<Err
     estimate_shared(check, channels, None)
 }
 
-/// [`estimate`], its check rows spread over `ranks` when given: each rank
-/// fills and contracts the rows of a contiguous range of elements (equal
-/// shares of the check rows), and K u_n at the check points is gathered
-/// whole on every rank before the summaries, which every rank computes
-/// alike. Every rank calls it together.
+/// [`estimate`], its check rows spread over ranks when `share` gives them
+/// and each element's rank: each rank fills and contracts the check rows
+/// of its own elements (which its plan `check` classifies), and K u_n at
+/// the check points is gathered whole on every rank before the summaries,
+/// which every rank computes alike. Every rank calls it together.
 pub fn estimate_shared(
     check: &AssemblyPlan,
     channels: &[ChannelFields<'_>],
-    ranks: Option<&dyn Ranks>,
+    share: Option<(&dyn Ranks, &[u32])>,
 ) -> Vec<ErrorEstimate> {
     let rows = check.rows();
     let ncols = check.dim();
     let n = rows.mesh().len();
-    let (size, rank) = ranks.map_or((1, 0), |r| (r.size(), r.rank()));
-    // Element ranges of equal shares of the check rows.
-    let mut cuts = vec![0];
-    let per = rows.len().div_ceil(size.max(1));
-    for k in 0..n {
-        if rows.offset(k) >= per * cuts.len() && cuts.len() < size {
-            cuts.push(k);
-        }
-    }
-    cuts.resize(size + 1, n);
-    let mine = cuts[rank]..cuts[rank + 1];
+    let owner = |k: usize| share.map_or(0, |(_, o)| o[k] as usize);
+    let rank = share.map_or(0, |(r, _)| r.rank());
+    let mine: Vec<usize> = (0..n).filter(|&k| owner(k) == rank).collect();
     let blocks = mine
         .into_par_iter()
         .map_init(Vec::new, |block, kp| {
@@ -329,15 +321,25 @@ pub fn estimate_shared(
         })
         .collect();
     let mut ku = by_channel(blocks, channels.len());
-    if let Some(ranks) = ranks.filter(|r| r.size() > 1) {
-        let counts: Vec<usize> = cuts
-            .windows(2)
-            .map(|w| rows.range_of(w[0]..w[1]).len())
-            .collect();
+    if let Some((ranks, _)) = share.filter(|(r, _)| r.size() > 1) {
+        // Every rank's rows, one rank after the other, then put back in
+        // element order.
+        let mut counts = vec![0; ranks.size()];
+        let mut order: Vec<Vec<usize>> = vec![Vec::new(); ranks.size()];
+        for k in 0..n {
+            counts[owner(k)] += rows.nodes_per(k);
+            order[owner(k)].push(k);
+        }
         for local in &mut ku {
             let mut all = vec![0.0; rows.len()];
             ranks.gather_all(local, &counts, &mut all);
-            *local = all;
+            *local = vec![0.0; rows.len()];
+            let mut at = 0;
+            for k in order.iter().flatten() {
+                let r = rows.range(*k);
+                local[r.clone()].copy_from_slice(&all[at..at + r.len()]);
+                at += r.len();
+            }
         }
     }
     summaries(check, channels, ku)

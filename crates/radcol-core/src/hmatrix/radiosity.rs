@@ -452,6 +452,23 @@ impl Structure for Geometry<'_> {
     }
 }
 
+/// Rank `rank`'s share among `size` of the compressed geometric matrix of
+/// `disc`, decided from the geometry ([`super::share::layout`]).
+pub(crate) fn layout(
+    disc: &Discretization,
+    opts: &HOptions,
+    (rank, size): (usize, usize),
+) -> super::share::Layout {
+    let (rows, cols) = boxes(disc);
+    super::share::layout(
+        (&rows, &cols),
+        &Geometry::new(disc),
+        opts,
+        (rank, size),
+        (&|i| disc.element_of(i), &|k| disc.offset(k), disc.mesh().len()),
+    )
+}
+
 /// What the compressed geometric matrix of `disc` will store
 /// (`HMatrix::predict`), from the geometry alone (no assembly plan),
 /// stopping once past `limit` bytes. Exact for the dense leaves of a

@@ -67,10 +67,10 @@ impl HMatrix {
     }
 
     /// [`HMatrix::build_checked`] of the whole matrix (`share` None), or of
-    /// rank `share.0`'s share of its rows among `share.1` ranks: the leaves
-    /// whose rows meet the rank's range of the row order
-    /// ([`super::share::cuts`]), the prediction and `check` of those alone.
-    /// A share takes nothing from a previous matrix.
+    /// a share of its rows: the leaves whose rows meet `share`, a range of
+    /// the row order (the block tree walked only where its rows meet it),
+    /// the prediction and `check` of those alone. A share takes nothing
+    /// from a previous matrix.
     ///
     /// # Errors
     /// What `check` returns.
@@ -80,7 +80,7 @@ impl HMatrix {
         entries: &dyn Entries,
         opts: &HOptions,
         reuse: Option<&Reuse<'_>>,
-        share: Option<(usize, usize)>,
+        share: Option<std::ops::Range<usize>>,
         check: impl FnOnce(&SampledSize) -> Result<(), E>,
     ) -> Result<(Self, SampledSize), E> {
         let reuse = reuse.filter(|_| share.is_none());
@@ -156,7 +156,7 @@ impl Blocks {
         entries: &dyn Entries,
         opts: &HOptions,
         reuse: Option<&Reuse<'_>>,
-        share: Option<(usize, usize)>,
+        share: Option<std::ops::Range<usize>>,
     ) -> Self {
         let trees = reuse
             .and_then(|p| p.trees(row_boxes, col_boxes, opts.leaf_size))
@@ -164,18 +164,26 @@ impl Blocks {
         // Leaves in block-tree order, each with the previous leaf it is.
         let found = RefCell::new(Vec::new());
         let taken = reuse.map(|p| p.taken(&trees));
-        let mut take = |r, c| match &taken {
-            Some(t) => t.subtree(&trees, r, c, &mut found.borrow_mut()),
-            None => false,
+        let held = share.unwrap_or(0..trees.rt.order.len());
+        let mut take = |r: usize, c| {
+            // Rows of another rank's share: not walked.
+            let rc = &trees.rt.clusters[r];
+            if rc.end <= held.start || held.end <= rc.start {
+                return true;
+            }
+            match &taken {
+                Some(t) => t.subtree(&trees, r, c, &mut found.borrow_mut()),
+                None => false,
+            }
         };
         let mut visit = |_: &_, _: &_, r, c, a| {
             found.borrow_mut().push(((r, c, a), None));
             ControlFlow::Continue(())
         };
         let _ = visit_blocks(&trees.rt, &trees.ct, entries, opts, &mut take, &mut visit);
-        let (mut blocks, mut reused): (Vec<_>, Vec<_>) = found.into_inner().into_iter().unzip();
+        let (blocks, reused): (Vec<_>, Vec<_>) = found.into_inner().into_iter().unzip();
         let (rt, ct) = (&trees.rt, &trees.ct);
-        let mut zero: Vec<bool> = blocks
+        let zero: Vec<bool> = blocks
             .par_iter()
             .zip(&reused)
             .map(|(&(r, c, _), old)| {
@@ -189,22 +197,6 @@ impl Blocks {
                     )
             })
             .collect();
-        let mut held = 0..rt.order.len();
-        if let Some((rank, size)) = share {
-            let cuts = super::share::cuts(rt, ct, &blocks, &zero, size);
-            held = cuts[rank]..cuts[rank + 1];
-            let meets = |&(r, _, _): &(usize, usize, bool)| {
-                let rc = &rt.clusters[r];
-                rc.start < held.end && held.start < rc.end
-            };
-            let keep: Vec<bool> = blocks.iter().map(meets).collect();
-            let mut k = keep.iter();
-            blocks.retain(|_| *k.next().expect("one flag a block"));
-            let mut k = keep.iter();
-            zero.retain(|_| *k.next().expect("one flag a block"));
-            let mut k = keep.iter();
-            reused.retain(|_| *k.next().expect("one flag a block"));
-        }
         Self {
             trees,
             blocks,

@@ -5,12 +5,13 @@
 //! product gathers x from every rank's rows and multiplies the leaves held:
 //! the assembly needs no communication, a product one gather of x.
 
-use super::cluster::ClusterTree;
-use super::{Entries, HMatrix, HOptions, SampledSize};
+use super::cluster::{Aabb, ClusterTree};
+use super::{visit_blocks, Entries, HMatrix, HOptions, SampledSize, Structure};
 use crate::ranks::Ranks;
 use crate::solve::LinearOperator;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::ops::{ControlFlow, Range};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -18,6 +19,92 @@ use std::time::Instant;
 /// cost of its rows: about what radiosity's far blocks keep at the
 /// default tolerance (ranks 2–12 on the Cornell box at 1e-8).
 const NOMINAL_RANK: f64 = 8.0;
+
+/// Where one rank's share lies, decided from the geometry before any
+/// assembly plan: the rows of the row order it holds, and the elements
+/// whose pairs its plan must classify (`AssemblyPlan` rows: those of its
+/// own rows, and those of every row cluster that straddles its range
+/// where the block tree asks whether a block is smooth, so that its block
+/// tree is the one-process tree restricted to its rows).
+#[derive(Clone, Debug)]
+pub(crate) struct Layout {
+    /// Rows (positions of the row order) held.
+    pub(crate) held: Range<usize>,
+    /// Per element: whether the plan classifies its pairs.
+    pub(crate) elements: Vec<bool>,
+    /// Per element: the rank that holds its first row, which estimates
+    /// its error (the same on every rank).
+    pub(crate) owner: Vec<u32>,
+}
+
+/// The [`Layout`] of rank `rank` among `size`, from `geometry`'s block
+/// tree (row and column boxes, and the structure of the geometry alone:
+/// `super::radiosity::predict`'s). The cuts balance that tree's predicted
+/// cost ([`cuts`]); the classified elements are those of the rows held,
+/// and of the row cluster of every block the geometry finds admissible
+/// that meets the rows held without lying inside them: the block tree
+/// asks there, or below, whether the occlusion lets it stay low rank,
+/// which needs all its rows' pairs. `element_of` maps a row to its
+/// element, `first_row` an element to its first row, of `elements` in all.
+pub(crate) fn layout(
+    (row_boxes, col_boxes): (&[Aabb], &[Aabb]),
+    geometry: &dyn Structure,
+    opts: &HOptions,
+    (rank, size): (usize, usize),
+    (element_of, first_row, elements): (&dyn Fn(usize) -> usize, &dyn Fn(usize) -> usize, usize),
+) -> Layout {
+    let rt = ClusterTree::new(row_boxes, opts.leaf_size);
+    let ct = ClusterTree::new(col_boxes, opts.leaf_size);
+    let mut blocks = Vec::new();
+    let _ = visit_blocks(&rt, &ct, geometry, opts, &mut |_, _| false, &mut |_, _, r, c, a| {
+        blocks.push((r, c, a));
+        ControlFlow::Continue(())
+    });
+    let zero: Vec<bool> = blocks
+        .par_iter()
+        .map(|&(r, c, _)| {
+            let (rc, cc) = (&rt.clusters[r], &ct.clusters[c]);
+            geometry.is_zero(
+                &rt.order[rc.start..rc.end],
+                &rc.bbox,
+                &ct.order[cc.start..cc.end],
+                &cc.bbox,
+            )
+        })
+        .collect();
+    let cut = cuts(&rt, &ct, &blocks, &zero, size);
+    let held = cut[rank]..cut[rank + 1];
+    let mut classified = vec![false; elements];
+    let mut mark = |rows: Range<usize>| {
+        for &i in &rt.order[rows] {
+            classified[element_of(i)] = true;
+        }
+    };
+    mark(held.clone());
+    for &(r, _, admissible) in &blocks {
+        let rc = &rt.clusters[r];
+        let meets = rc.start < held.end && held.start < rc.end;
+        let inside = held.start <= rc.start && rc.end <= held.end;
+        if admissible && meets && !inside {
+            mark(rc.start..rc.end);
+        }
+    }
+    let mut position = vec![0; rt.order.len()];
+    for (p, &i) in rt.order.iter().enumerate() {
+        position[i] = p;
+    }
+    let owner = (0..elements)
+        .map(|k| {
+            let p = position[first_row(k)];
+            (cut.partition_point(|&c| c <= p) - 1) as u32
+        })
+        .collect();
+    Layout {
+        held,
+        elements: classified,
+        owner,
+    }
+}
 
 /// Where the row order is cut among `size` ranks: `size + 1` positions,
 /// from 0 to the number of rows, rank p holding `cuts[p]..cuts[p + 1]`.
@@ -107,10 +194,11 @@ pub struct RowShare {
 }
 
 impl RowShare {
-    /// This rank's share (of `ranks`) of the matrix
-    /// `HMatrix::build_checked` builds from the same arguments, with
-    /// `check` seeing the share's predicted size (its own memory). Every
-    /// rank must call it with the same arguments.
+    /// This rank's share (of `ranks`), the rows `held` of the row order
+    /// ([`Layout`]), of the matrix `HMatrix::build_checked` builds from
+    /// the same arguments, with `check` seeing the share's predicted size
+    /// (its own memory). Every rank calls it together, with its own
+    /// layout's rows.
     ///
     /// # Errors
     /// What `check` returns.
@@ -119,10 +207,10 @@ impl RowShare {
         col_boxes: &[super::cluster::Aabb],
         entries: &dyn Entries,
         opts: &HOptions,
-        ranks: Arc<dyn Ranks>,
+        (ranks, held): (Arc<dyn Ranks>, Range<usize>),
         check: impl FnOnce(&SampledSize) -> Result<(), E>,
     ) -> Result<(Self, SampledSize), E> {
-        let share = Some((ranks.rank(), ranks.size()));
+        let share = Some(held);
         let (h, size) =
             HMatrix::build_part(row_boxes, col_boxes, entries, opts, None, share, check)?;
         let rows = h.rt.order[h.held.clone()].to_vec();

@@ -325,7 +325,8 @@ fn count_limit(available: Option<u64>) -> f64 {
     available.map_or(f64::INFINITY, |a| 4.0 * usable(a))
 }
 
-/// Builds the compressed operator from `plan`'s integrators, measures its
+/// Builds the compressed operator from `plan`'s integrators (in a solve
+/// spread over ranks, this rank's share: the rows `held`), measures its
 /// product error at [`SAMPLED_ROWS`] rows into `decision`, and puts its
 /// predicted size into `memory`; returns it with its kernel evaluations.
 /// Its size is predicted twice before it is built: from the plan before
@@ -342,12 +343,13 @@ pub(crate) fn build_compressed(
     plan: &AssemblyPlan,
     cfg: &SolveConfig,
     previous: Option<(&HMatrix, &Unchanged)>,
+    held: Option<std::ops::Range<usize>>,
     decision: &mut OperatorDecision,
     memory: &mut MemoryUse,
 ) -> Result<(GeometricOperator, u64), InputError> {
     let entries = PlanEntries::new(plan);
-    if let Some(ranks) = cfg.distributed() {
-        return build_share(&entries, cfg, ranks.clone(), decision, memory);
+    if let Some((ranks, held)) = cfg.distributed().zip(held) {
+        return build_share(&entries, cfg, (ranks.clone(), held), decision, memory);
     }
     let available = available_memory().filter(|_| cfg.check_memory);
     // Counted over the plan's block tree before any block is computed;
@@ -386,13 +388,16 @@ pub(crate) fn build_compressed(
 fn build_share(
     entries: &PlanEntries<'_>,
     cfg: &SolveConfig,
-    ranks: std::sync::Arc<dyn crate::ranks::Ranks>,
+    share: (
+        std::sync::Arc<dyn crate::ranks::Ranks>,
+        std::ops::Range<usize>,
+    ),
     decision: &mut OperatorDecision,
     memory: &mut MemoryUse,
 ) -> Result<(GeometricOperator, u64), InputError> {
     let available = available_memory().filter(|_| cfg.check_memory);
     let (rows, cols) = entries.boxes();
-    let (share, sampled) = RowShare::build(&rows, &cols, entries, &cfg.compression, ranks, |s| {
+    let (share, sampled) = RowShare::build(&rows, &cols, entries, &cfg.compression, share, |s| {
         *memory = memory.with_matrix(Some(s.bytes));
         match cfg.check_memory {
             true => memory.check(available),
@@ -411,6 +416,17 @@ fn build_share(
         memory.check_compressed(share.local(), available_memory())?;
     }
     Ok((GeometricOperator::Shared(share), entries.evaluations()))
+}
+
+/// This rank's share of `disc`'s compressed operator in a solve spread
+/// over `ranks`, from the geometry alone: the rows it holds and the
+/// elements its plan classifies ([`crate::hmatrix::radiosity::layout`]).
+pub(crate) fn share_layout(
+    disc: &Discretization,
+    cfg: &SolveConfig,
+    ranks: &dyn crate::ranks::Ranks,
+) -> crate::hmatrix::share::Layout {
+    crate::hmatrix::radiosity::layout(disc, &cfg.compression, (ranks.rank(), ranks.size()))
 }
 
 /// The geometric operator Gm of a solve (no ρ: every channel, emission and

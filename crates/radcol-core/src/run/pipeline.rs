@@ -48,6 +48,8 @@ pub(crate) struct Previous<'a> {
 /// What the assembly stage built.
 struct Built {
     plan: AssemblyPlan,
+    /// This rank's share, in a solve spread over ranks.
+    layout: Option<crate::hmatrix::share::Layout>,
     operator: GeometricOperator,
     decision: OperatorDecision,
     kernel_evals: u64,
@@ -82,8 +84,21 @@ fn assemble(
     }
     let progress = cfg.progress.clone();
     let before = super::size::process_memory().map(|(rss, _)| rss);
-    let plan = match previous {
-        Some(p) => AssemblyPlan::updating(
+    // Spread over ranks: each plans the row blocks of its share alone.
+    let layout = cfg
+        .distributed()
+        .filter(|_| compressed)
+        .map(|r| super::operator::share_layout(disc, cfg, &**r));
+    let plan = match (previous, &layout) {
+        (_, Some(l)) => AssemblyPlan::of_rows(
+            disc.clone(),
+            (None, None),
+            cfg.quad.clone(),
+            visibility,
+            progress,
+            &l.elements,
+        ),
+        (Some(p), None) => AssemblyPlan::updating(
             disc.clone(),
             cfg.quad.clone(),
             visibility,
@@ -91,7 +106,9 @@ fn assemble(
             &p.plans.solve,
             p.unchanged.clone(),
         ),
-        None => AssemblyPlan::with_progress(disc.clone(), cfg.quad.clone(), visibility, progress),
+        (None, None) => {
+            AssemblyPlan::with_progress(disc.clone(), cfg.quad.clone(), visibility, progress)
+        }
     };
     // What building the plan cost the process (its heap with the
     // allocator's overhead: 25 % more on Cornell), where that is measured.
@@ -125,7 +142,9 @@ fn assemble(
     let dense_previous = previous.and_then(|p| p.outcome.operator.dense());
     let (operator, kernel_evals, device_seconds, info) = if compressed {
         let reuse = previous.and_then(|p| Some((p.outcome.operator.compressed()?, &*p.unchanged)));
-        let (operator, evals) = build_compressed(&plan, cfg, reuse, &mut decision, &mut memory)?;
+        let held = layout.as_ref().map(|l| l.held.clone());
+        let (operator, evals) =
+            build_compressed(&plan, cfg, reuse, held, &mut decision, &mut memory)?;
         (operator, evals, None, CpuBackend.info())
     } else {
         let assembled = match dense_previous {
@@ -142,6 +161,7 @@ fn assemble(
     };
     Ok(Built {
         plan,
+        layout,
         operator,
         decision,
         kernel_evals,
@@ -193,7 +213,11 @@ fn settle(
 fn estimate_channels(
     problem: &Problem,
     cfg: &SolveConfig,
-    (visibility, square): (&VisibilityAnalysis, &AssemblyPlan),
+    (visibility, square, layout): (
+        &VisibilityAnalysis,
+        &AssemblyPlan,
+        Option<&crate::hmatrix::share::Layout>,
+    ),
     channels: &mut [ChannelResult],
     previous: Option<&Previous<'_>>,
     guess: Option<&[Vec<f64>]>,
@@ -215,14 +239,33 @@ fn estimate_channels(
         tol: cfg.quad.tol.max(ESTIMATE_QUAD_TOL),
         ..cfg.quad.clone()
     };
-    let reuse = previous.and_then(|p| p.plans.check.as_ref().map(|c| (c, p.unchanged.clone())));
-    let plan = AssemblyPlan::at_points(
-        disc.clone(),
-        check.clone(),
-        quad.clone(),
-        visibility,
-        (reuse, Some(square)),
-    );
+    // Spread over ranks: each estimates the elements it owns, planning
+    // their check rows alone.
+    let share = cfg.distributed().zip(layout).map(|(r, l)| {
+        let owned: Vec<bool> = l.owner.iter().map(|&p| p as usize == r.rank()).collect();
+        (&**r, l, owned)
+    });
+    let plan = match &share {
+        Some((_, _, owned)) => AssemblyPlan::of_rows(
+            disc.clone(),
+            (Some(check.clone()), Some(square)),
+            quad.clone(),
+            visibility,
+            None,
+            owned,
+        ),
+        None => {
+            let reuse =
+                previous.and_then(|p| p.plans.check.as_ref().map(|c| (c, p.unchanged.clone())));
+            AssemblyPlan::at_points(
+                disc.clone(),
+                check.clone(),
+                quad.clone(),
+                visibility,
+                (reuse, Some(square)),
+            )
+        }
+    };
     let inputs: Vec<ChannelFields<'_>> = channels
         .iter()
         .zip(&check_fields)
@@ -233,13 +276,19 @@ fn estimate_channels(
             emission_nodes: &ch.emission,
         })
         .collect();
+    // An update reads check rows of every element: one process only.
     let updated = previous
         .zip(guess)
+        .filter(|_| share.is_none())
         .and_then(|(p, g)| update(&plan, &inputs, p, g));
-    let ranks = cfg.distributed().map(|r| &**r);
-    let mut estimates = updated.unwrap_or_else(|| estimate_shared(&plan, &inputs, ranks));
+    let by_rank = share.as_ref().map(|(r, l, _)| (*r, l.owner.as_slice()));
+    let mut estimates = updated.unwrap_or_else(|| estimate_shared(&plan, &inputs, by_rank));
     // Shadows of the direct light between an element's check points.
-    let found = probes::find(square, &check, &probes::emitting(disc, channels));
+    let owned = share.as_ref().map(|(_, _, o)| o.as_slice());
+    let mut found = probes::find(square, &check, &probes::emitting(disc, channels), owned);
+    if let Some((ranks, _, _)) = &share {
+        found = probes::gather(*ranks, &found);
+    }
     probes::apply(
         &found,
         (disc, &quad, visibility),
@@ -249,7 +298,12 @@ fn estimate_channels(
     );
     // Approximate visibility: the most the residual at a node or check
     // point can have moved, per unit of ρ max|u| (0 when exact).
-    let mass = (square.stats().visibility_bound).max(plan.stats().visibility_bound);
+    let mut mass = [(square.stats().visibility_bound).max(plan.stats().visibility_bound)];
+    if let Some((ranks, _, _)) = &share {
+        // Each rank's plans hold its rows' pairs.
+        ranks.max(&mut mass);
+    }
+    let mass = mass[0];
     for ((ch, mut e), (rho, _)) in channels.iter_mut().zip(estimates).zip(&check_fields) {
         let rho_max = ch.rho.iter().chain(rho).copied().fold(0.0, f64::max);
         e.add_visibility_bound(rho_max, mass);
@@ -410,7 +464,7 @@ impl Stages<'_> {
             estimate_channels(
                 problem,
                 cfg,
-                (&visibility, &built.plan),
+                (&visibility, &built.plan, built.layout.as_ref()),
                 &mut channels,
                 self.previous,
                 self.guess,

@@ -43,8 +43,15 @@ pub(crate) struct Probe {
 }
 
 /// The probes of the elements of `square`'s discretization (the solve's
-/// plan), with `check` its check points and `emitting` which elements emit.
-pub(crate) fn find(square: &AssemblyPlan, check: &Discretization, emitting: &[bool]) -> Vec<Probe> {
+/// plan), with `check` its check points and `emitting` which elements emit;
+/// of the elements `owned` alone when given (a rank's, whose rows its plan
+/// classified: [`gather`] collects every rank's).
+pub(crate) fn find(
+    square: &AssemblyPlan,
+    check: &Discretization,
+    emitting: &[bool],
+    owned: Option<&[bool]>,
+) -> Vec<Probe> {
     let Some(occ) = square.occluders() else {
         return Vec::new();
     };
@@ -53,7 +60,7 @@ pub(crate) fn find(square: &AssemblyPlan, check: &Discretization, emitting: &[bo
         .into_par_iter()
         .flat_map_iter(|b| {
             let mut taken: Vec<[f64; 2]> = Vec::new();
-            if mesh.is_flat(b) {
+            if mesh.is_flat(b) && owned.is_none_or(|o| o[b]) {
                 let v = mesh.vertices(b);
                 let checks: Vec<[f64; 2]> = check.points()[check.range(b)]
                     .iter()
@@ -88,6 +95,32 @@ pub(crate) fn find(square: &AssemblyPlan, check: &Discretization, emitting: &[bo
             taken.into_iter().map(move |st| Probe { element: b, st })
         })
         .collect()
+}
+
+/// Every rank's probes ([`find`] of the elements it owns), on every rank,
+/// in element order as one process finds them.
+pub(crate) fn gather(ranks: &dyn crate::ranks::Ranks, mine: &[Probe]) -> Vec<Probe> {
+    let flat: Vec<f64> = mine
+        .iter()
+        .flat_map(|p| [p.element as f64, p.st[0], p.st[1]])
+        .collect();
+    let counts: Vec<usize> = ranks
+        .gather_each(flat.len() as f64)
+        .into_iter()
+        .map(|c| c as usize)
+        .collect();
+    let mut all = vec![0.0; counts.iter().sum()];
+    ranks.gather_all(&flat, &counts, &mut all);
+    let mut probes: Vec<Probe> = all
+        .chunks_exact(3)
+        .map(|p| Probe {
+            element: p[0] as usize,
+            st: [p[1], p[2]],
+        })
+        .collect();
+    // Each element's probes come from one rank, in the order found.
+    probes.sort_by_key(|p| p.element);
+    probes
 }
 
 /// Evaluates η of every channel at `probes` and adds each to its channel's

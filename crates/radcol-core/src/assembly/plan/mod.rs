@@ -113,6 +113,10 @@ pub struct AssemblyPlan {
     stored: Option<Arc<Stored>>,
     /// The store of the previous plan this one reused, if it is alive.
     previous_stored: Option<Weak<Stored>>,
+    /// Built for some row blocks only (the others culled): a rank's share
+    /// of a distributed solve, or a cost sample. Never reused by a later
+    /// plan, whose rows may be others.
+    only_some_rows: bool,
 }
 
 impl AssemblyPlan {
@@ -199,7 +203,8 @@ impl AssemblyPlan {
         visibility: &VisibilityAnalysis,
         unchanged: &Unchanged,
     ) -> bool {
-        self.opts == *opts
+        !self.only_some_rows
+            && self.opts == *opts
             && self.visibility.needed == visibility.needed
             && unchanged.len() == disc.mesh().len()
             && unchanged.old_len() == self.disc.mesh().len()
@@ -289,7 +294,34 @@ impl AssemblyPlan {
             unchanged: prev.map(|(p, u)| (u, p.disc.clone(), p.rows().clone())),
             row_seconds,
             stored,
+            only_some_rows: only.is_some(),
         }
+    }
+
+    /// The plan of the row blocks `only[kp]` alone (the others culled), a
+    /// rank's share of a distributed solve: square (`rows` None) or at
+    /// other points, taking the pairs `square` searched where it has them
+    /// ([`AssemblyPlan::at_points`]). Such a plan is never reused.
+    ///
+    /// # Panics
+    /// When `only` does not have one entry per element.
+    pub(crate) fn of_rows(
+        disc: Arc<Discretization>,
+        (rows, square): (Option<Arc<Discretization>>, Option<&AssemblyPlan>),
+        opts: QuadratureOptions,
+        visibility: &VisibilityAnalysis,
+        progress: Option<ProgressHandle>,
+        only: &[bool],
+    ) -> Self {
+        assert_eq!(only.len(), disc.mesh().len(), "one flag per row block");
+        let square = square.filter(|s| {
+            rows.is_some()
+                && s.rows.is_none()
+                && Arc::ptr_eq(s.disc.mesh(), disc.mesh())
+                && s.visibility.needed == visibility.needed
+                && s.opts.visibility_budget == opts.visibility_budget
+        });
+        Self::build(disc, rows, opts, visibility, progress, (None, square), Some(only))
     }
 
     /// The relation to the previous plan's elements, for a plan built by
