@@ -5,7 +5,9 @@
 //! products summed over them. Compared at every node of every channel with
 //! the one-process compressed solve: the same values to 1e-10 of the
 //! largest, the same GMRES iterations, each rank holding a share of the
-//! operator, and the shares adding up to the whole.
+//! operator, and the shares adding up to the whole. Each rank plans only
+//! its own rows (and those of clusters straddling its edges), so these
+//! tests also check that its block tree is the one-process tree.
 
 use radcol_core::assembly::CpuBackend;
 use radcol_core::error::{Error, InputError};
@@ -71,7 +73,9 @@ fn shared_rows_give_the_one_process_solution() {
         alone.discretization.len(),
         whole.stored
     );
-    for size in [2, 3] {
+    // Five: cuts fall inside clusters that the geometry finds admissible
+    // against others, whose rows the ranks on both sides must classify.
+    for size in [2, 3, 5] {
         let outs: Vec<SolveOutcome> = spread(&problem, size, &config(None))
             .into_iter()
             .map(Result::unwrap)

@@ -46,7 +46,9 @@ pub fn run(config: Config) -> Result<()> {
     Ok(())
 }
 
-fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
+/// The outputs of `job` can be written, and none is one of its inputs or
+/// another output, before any work.
+fn check_files(job: &SolveJob) -> Result<()> {
     for o in &job.outputs {
         check_writable(&o.file)?;
     }
@@ -62,7 +64,11 @@ fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
         inputs.push(("the --at points file", &at.source));
     }
     let files: Vec<&OutputFile> = job.outputs.iter().map(|o| &o.file).chain(at_out).collect();
-    setup::check_distinct(&files, &inputs)?;
+    Ok(setup::check_distinct(&files, &inputs)?)
+}
+
+fn run_solve(job: SolveJob, w: &mut dyn Write) -> Result<()> {
+    check_files(&job)?;
     let mut s = setup::setup(&job.problem, job.level, job.max_edge, job.adapt.is_some())?;
     if let Some(at) = &job.at {
         points::precheck(at, &s)?;

@@ -29,17 +29,18 @@
 //! negative u_n at a node or check point is an error at least |u_n| there:
 //! it is counted and, on such problems, taken into the element's estimate.
 
-use crate::assembly::{AssemblyPlan, FillMode};
+use crate::assembly::AssemblyPlan;
 use crate::discretization::Discretization;
 use crate::nodes::{NodeSet, MAX_DEGREE};
 use crate::norms::LATTICE;
 use crate::quadrature::RuleLadder;
-use crate::ranks::Ranks;
 use crate::solution::Solution;
 use rayon::prelude::*;
 use serde::Serialize;
 
+mod shared;
 mod update;
+pub use shared::estimate_shared;
 pub use update::estimate_updated;
 
 /// The element-integral tolerance of the check rows (the solve's own when
@@ -295,59 +296,9 @@ pub fn estimate(check: &AssemblyPlan, channels: &[ChannelFields<'_>]) -> Vec<Err
     estimate_shared(check, channels, None)
 }
 
-/// [`estimate`], its check rows spread over ranks when `share` gives them
-/// and each element's rank: each rank fills and contracts the check rows
-/// of its own elements (which its plan `check` classifies), and K u_n at
-/// the check points is gathered whole on every rank before the summaries,
-/// which every rank computes alike. Every rank calls it together.
-pub fn estimate_shared(
-    check: &AssemblyPlan,
-    channels: &[ChannelFields<'_>],
-    share: Option<(&dyn Ranks, &[u32])>,
-) -> Vec<ErrorEstimate> {
-    let rows = check.rows();
-    let ncols = check.dim();
-    let n = rows.mesh().len();
-    let owner = |k: usize| share.map_or(0, |(_, o)| o[k] as usize);
-    let rank = share.map_or(0, |(r, _)| r.rank());
-    let mine: Vec<usize> = (0..n).filter(|&k| owner(k) == rank).collect();
-    let blocks = mine
-        .into_par_iter()
-        .map_init(Vec::new, |block, kp| {
-            let fc = rows.nodes_per(kp);
-            block.resize(fc * ncols, 0.0);
-            check.fill_block(kp, &mut block[..fc * ncols], FillMode::All);
-            contract(&block[..fc * ncols], fc, ncols, channels)
-        })
-        .collect();
-    let mut ku = by_channel(blocks, channels.len());
-    if let Some((ranks, _)) = share.filter(|(r, _)| r.size() > 1) {
-        // Every rank's rows, one rank after the other, then put back in
-        // element order.
-        let mut counts = vec![0; ranks.size()];
-        let mut order: Vec<Vec<usize>> = vec![Vec::new(); ranks.size()];
-        for k in 0..n {
-            counts[owner(k)] += rows.nodes_per(k);
-            order[owner(k)].push(k);
-        }
-        for local in &mut ku {
-            let mut all = vec![0.0; rows.len()];
-            ranks.gather_all(local, &counts, &mut all);
-            *local = vec![0.0; rows.len()];
-            let mut at = 0;
-            for k in order.iter().flatten() {
-                let r = rows.range(*k);
-                local[r.clone()].copy_from_slice(&all[at..at + r.len()]);
-                at += r.len();
-            }
-        }
-    }
-    summaries(check, channels, ku)
-}
-
 /// Per channel, the values of every element's `blocks` (channel-major
 /// within each block, the same number per channel), in check-row order.
-fn by_channel(blocks: Vec<Vec<f64>>, channels: usize) -> Vec<Vec<f64>> {
+pub(super) fn by_channel(blocks: Vec<Vec<f64>>, channels: usize) -> Vec<Vec<f64>> {
     (0..channels)
         .map(|c| {
             blocks
@@ -363,7 +314,7 @@ fn by_channel(blocks: Vec<Vec<f64>>, channels: usize) -> Vec<Vec<f64>> {
 
 /// The estimate of every channel from `ku`, K u_n at its check points
 /// (computed, drift 0): u_n there, η = E + ρ K u_n - u_n, and the summaries.
-fn summaries(
+pub(super) fn summaries(
     check: &AssemblyPlan,
     channels: &[ChannelFields<'_>],
     ku: Vec<Vec<f64>>,
@@ -391,7 +342,7 @@ fn summaries(
 
 /// K u_n at the `fc` check points of one element for every channel
 /// (channel-major), from its rows `block` (fc × ncols).
-fn contract(block: &[f64], fc: usize, ncols: usize, channels: &[ChannelFields<'_>]) -> Vec<f64> {
+pub(super) fn contract(block: &[f64], fc: usize, ncols: usize, channels: &[ChannelFields<'_>]) -> Vec<f64> {
     let mut out = Vec::with_capacity(channels.len() * fc);
     for ch in channels {
         let u = ch.solution.nodal();

@@ -22,6 +22,7 @@ mod outcome;
 mod pipeline;
 mod probes;
 mod relight;
+mod share;
 mod size;
 
 pub use crate::solve::true_residual;

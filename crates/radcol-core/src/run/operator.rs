@@ -349,7 +349,7 @@ pub(crate) fn build_compressed(
 ) -> Result<(GeometricOperator, u64), InputError> {
     let entries = PlanEntries::new(plan);
     if let Some((ranks, held)) = cfg.distributed().zip(held) {
-        return build_share(&entries, cfg, (ranks.clone(), held), decision, memory);
+        return super::share::build_share(&entries, cfg, (ranks.clone(), held), decision, memory);
     }
     let available = available_memory().filter(|_| cfg.check_memory);
     // Counted over the plan's block tree before any block is computed;
@@ -379,54 +379,6 @@ pub(crate) fn build_compressed(
         memory.check_compressed(&h, available_memory())?;
     }
     Ok((GeometricOperator::Compressed(h), entries.evaluations()))
-}
-
-/// [`build_compressed`] spread over `ranks`: this rank's share of the rows
-/// ([`RowShare`]), its size predicted from its own sample and checked
-/// against this process's memory; the product error measured over the
-/// whole matrix's sample rows (each rank checks those it holds).
-fn build_share(
-    entries: &PlanEntries<'_>,
-    cfg: &SolveConfig,
-    share: (
-        std::sync::Arc<dyn crate::ranks::Ranks>,
-        std::ops::Range<usize>,
-    ),
-    decision: &mut OperatorDecision,
-    memory: &mut MemoryUse,
-) -> Result<(GeometricOperator, u64), InputError> {
-    let available = available_memory().filter(|_| cfg.check_memory);
-    let (rows, cols) = entries.boxes();
-    let (share, sampled) = RowShare::build(&rows, &cols, entries, &cfg.compression, share, |s| {
-        *memory = memory.with_matrix(Some(s.bytes));
-        match cfg.check_memory {
-            true => memory.check(available),
-            false => Ok(()),
-        }
-    })?;
-    if share.counts().contains(&0) {
-        return Err(InputError::TooFewRows {
-            unknowns: share.local().stats().shape.0,
-            ranks: share.counts().len(),
-        });
-    }
-    decision.sampled_bytes = Some(sampled);
-    decision.sampled_error = Some(share.sampled_error(entries, SAMPLED_ROWS));
-    if cfg.check_memory {
-        memory.check_compressed(share.local(), available_memory())?;
-    }
-    Ok((GeometricOperator::Shared(share), entries.evaluations()))
-}
-
-/// This rank's share of `disc`'s compressed operator in a solve spread
-/// over `ranks`, from the geometry alone: the rows it holds and the
-/// elements its plan classifies ([`crate::hmatrix::radiosity::layout`]).
-pub(crate) fn share_layout(
-    disc: &Discretization,
-    cfg: &SolveConfig,
-    ranks: &dyn crate::ranks::Ranks,
-) -> crate::hmatrix::share::Layout {
-    crate::hmatrix::radiosity::layout(disc, &cfg.compression, (ranks.rank(), ranks.size()))
 }
 
 /// The geometric operator Gm of a solve (no ρ: every channel, emission and

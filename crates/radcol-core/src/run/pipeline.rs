@@ -5,18 +5,12 @@ use super::operator::{
     build_compressed, decide_now, lighter_than_dense, predict_compressed, GeometricOperator,
     OperatorDecision, OperatorKind,
 };
-use super::probes;
 use super::relight::Relighter;
 use super::size::{available_memory, MemoryUse};
 use super::{ChannelResult, SolveConfig, SolveOutcome, Timings};
-use crate::assembly::QuadratureOptions;
 use crate::assembly::{AssemblyBackend, AssemblyPlan, BackendInfo, CpuBackend, Unchanged};
 use crate::discretization::Discretization;
 use crate::error::Error;
-use crate::estimate::{
-    check_discretization, estimate_shared, estimate_updated, ChannelFields, ErrorEstimate,
-    ESTIMATE_QUAD_TOL,
-};
 use crate::mesh::Mesh;
 use crate::nodes::{nodes_per_element, NodeSet};
 use crate::norms::error_norms;
@@ -82,34 +76,13 @@ fn assemble(
         let (available, above) = (available_memory(), super::PREDICT_PLAN_ABOVE);
         super::cost::check_plan_memory(disc, &cfg.quad, visibility, available, above)?;
     }
-    let progress = cfg.progress.clone();
     let before = super::size::process_memory().map(|(rss, _)| rss);
     // Spread over ranks: each plans the row blocks of its share alone.
     let layout = cfg
         .distributed()
         .filter(|_| compressed)
-        .map(|r| super::operator::share_layout(disc, cfg, &**r));
-    let plan = match (previous, &layout) {
-        (_, Some(l)) => AssemblyPlan::of_rows(
-            disc.clone(),
-            (None, None),
-            cfg.quad.clone(),
-            visibility,
-            progress,
-            &l.elements,
-        ),
-        (Some(p), None) => AssemblyPlan::updating(
-            disc.clone(),
-            cfg.quad.clone(),
-            visibility,
-            progress,
-            &p.plans.solve,
-            p.unchanged.clone(),
-        ),
-        (None, None) => {
-            AssemblyPlan::with_progress(disc.clone(), cfg.quad.clone(), visibility, progress)
-        }
-    };
+        .map(|r| super::share::share_layout(disc, cfg, &**r));
+    let plan = plan_of(disc, cfg, visibility, previous, layout.as_ref());
     // What building the plan cost the process (its heap with the
     // allocator's overhead: 25 % more on Cornell), where that is measured.
     let plan_cost = match (before, super::size::process_memory()) {
@@ -171,6 +144,37 @@ fn assemble(
     })
 }
 
+/// The solve's plan: of this rank's rows (`layout`) in a solve spread over
+/// ranks, else updating `previous`'s where there is one, else fresh.
+fn plan_of(
+    disc: &Arc<Discretization>,
+    cfg: &SolveConfig,
+    visibility: &VisibilityAnalysis,
+    previous: Option<&Previous<'_>>,
+    layout: Option<&crate::hmatrix::share::Layout>,
+) -> AssemblyPlan {
+    let (quad, progress) = (cfg.quad.clone(), cfg.progress.clone());
+    match (previous, layout) {
+        (_, Some(l)) => AssemblyPlan::of_rows(
+            disc.clone(),
+            (None, None),
+            quad,
+            visibility,
+            progress,
+            &l.elements,
+        ),
+        (Some(p), None) => AssemblyPlan::updating(
+            disc.clone(),
+            quad,
+            visibility,
+            progress,
+            &p.plans.solve,
+            p.unchanged.clone(),
+        ),
+        (None, None) => AssemblyPlan::with_progress(disc.clone(), quad, visibility, progress),
+    }
+}
+
 /// The memory a solve will use with the operator `decision` finally
 /// stores (`predict`: the prediction for a matrix of so many bytes, None
 /// dense). The compressed operator counts at its predicted size (checked
@@ -204,147 +208,6 @@ fn settle(
         memory = predict(decision.predicted_bytes);
     }
     Ok(memory)
-}
-
-/// Estimates every channel's error at the check points of its mesh
-/// ([`crate::estimate`]), with the solve's quadrature and visibility, or
-/// updates `previous`'s estimate where it allows and that pays ([`update`]);
-/// returns the check points' plan.
-fn estimate_channels(
-    problem: &Problem,
-    cfg: &SolveConfig,
-    (visibility, square, layout): (
-        &VisibilityAnalysis,
-        &AssemblyPlan,
-        Option<&crate::hmatrix::share::Layout>,
-    ),
-    channels: &mut [ChannelResult],
-    previous: Option<&Previous<'_>>,
-    guess: Option<&[Vec<f64>]>,
-) -> Result<Option<AssemblyPlan>, Error> {
-    let Some(first) = channels.first() else {
-        return Ok(None);
-    };
-    Error::if_cancelled(cfg.progress.as_ref(), "solve")?;
-    let disc = first.solution.discretization();
-    // A stage of its own (about as long as the assembly), counted in the
-    // row blocks it fills, reported when it ends.
-    let blocks = disc.mesh().len() as u64;
-    if let Some(p) = &cfg.progress {
-        p.start("estimate", blocks);
-    }
-    let check = Arc::new(check_discretization(disc));
-    let check_fields = fields(&check, problem)?;
-    let quad = QuadratureOptions {
-        tol: cfg.quad.tol.max(ESTIMATE_QUAD_TOL),
-        ..cfg.quad.clone()
-    };
-    // Spread over ranks: each estimates the elements it owns, planning
-    // their check rows alone.
-    let share = cfg.distributed().zip(layout).map(|(r, l)| {
-        let owned: Vec<bool> = l.owner.iter().map(|&p| p as usize == r.rank()).collect();
-        (&**r, l, owned)
-    });
-    let plan = match &share {
-        Some((_, _, owned)) => AssemblyPlan::of_rows(
-            disc.clone(),
-            (Some(check.clone()), Some(square)),
-            quad.clone(),
-            visibility,
-            None,
-            owned,
-        ),
-        None => {
-            let reuse =
-                previous.and_then(|p| p.plans.check.as_ref().map(|c| (c, p.unchanged.clone())));
-            AssemblyPlan::at_points(
-                disc.clone(),
-                check.clone(),
-                quad.clone(),
-                visibility,
-                (reuse, Some(square)),
-            )
-        }
-    };
-    let inputs: Vec<ChannelFields<'_>> = channels
-        .iter()
-        .zip(&check_fields)
-        .map(|(ch, (rho, emission))| ChannelFields {
-            solution: &ch.solution,
-            rho,
-            emission,
-            emission_nodes: &ch.emission,
-        })
-        .collect();
-    // An update reads check rows of every element: one process only.
-    let updated = previous
-        .zip(guess)
-        .filter(|_| share.is_none())
-        .and_then(|(p, g)| update(&plan, &inputs, p, g));
-    let by_rank = share.as_ref().map(|(r, l, _)| (*r, l.owner.as_slice()));
-    let mut estimates = updated.unwrap_or_else(|| estimate_shared(&plan, &inputs, by_rank));
-    // Shadows of the direct light between an element's check points.
-    let owned = share.as_ref().map(|(_, _, o)| o.as_slice());
-    let mut found = probes::find(square, &check, &probes::emitting(disc, channels), owned);
-    if let Some((ranks, _, _)) = &share {
-        found = probes::gather(*ranks, &found);
-    }
-    probes::apply(
-        &found,
-        (disc, &quad, visibility),
-        problem,
-        channels,
-        &mut estimates,
-    );
-    // Approximate visibility: the most the residual at a node or check
-    // point can have moved, per unit of ρ max|u| (0 when exact).
-    let mut mass = [(square.stats().visibility_bound).max(plan.stats().visibility_bound)];
-    if let Some((ranks, _, _)) = &share {
-        // Each rank's plans hold its rows' pairs.
-        ranks.max(&mut mass);
-    }
-    let mass = mass[0];
-    for ((ch, mut e), (rho, _)) in channels.iter_mut().zip(estimates).zip(&check_fields) {
-        let rho_max = ch.rho.iter().chain(rho).copied().fold(0.0, f64::max);
-        e.add_visibility_bound(rho_max, mass);
-        ch.estimate = Some(e);
-    }
-    if let Some(p) = &cfg.progress {
-        p.advance(blocks);
-    }
-    Ok(Some(plan))
-}
-
-/// The estimate of `inputs` updated from `previous`'s, with `guess` (the
-/// previous solution at this mesh's nodes), where that is allowed and pays.
-fn update(
-    plan: &AssemblyPlan,
-    inputs: &[ChannelFields<'_>],
-    previous: &Previous<'_>,
-    guess: &[Vec<f64>],
-) -> Option<Vec<ErrorEstimate>> {
-    if previous.estimate_within <= 0.0 {
-        return None;
-    }
-    let prev: Option<Vec<_>> = previous
-        .outcome
-        .channels
-        .iter()
-        .map(|c| c.estimate.as_ref())
-        .collect();
-    let change: Vec<Vec<f64>> = inputs
-        .iter()
-        .zip(guess)
-        .map(|(ch, g)| {
-            ch.solution
-                .nodal()
-                .iter()
-                .zip(g)
-                .map(|(u, g)| u - g)
-                .collect()
-        })
-        .collect();
-    estimate_updated(plan, inputs, &prev?, &change, previous.estimate_within)
 }
 
 /// Solves `problem` with `cfg`, assembling on `backend`.
@@ -461,7 +324,7 @@ impl Stages<'_> {
 
         let t = Instant::now();
         let check = if cfg.estimate {
-            estimate_channels(
+            check::estimate_channels(
                 problem,
                 cfg,
                 (&visibility, &built.plan, built.layout.as_ref()),
@@ -521,5 +384,6 @@ impl Stages<'_> {
     }
 }
 
+mod check;
 #[cfg(test)]
 mod tests;
