@@ -113,8 +113,9 @@ fn shared_rows_give_the_one_process_solution() {
     }
 }
 
-/// With the estimate (its check rows spread over the ranks too): the
-/// same element figures as one process, to 1e-10 of the largest.
+/// With the estimate (its check rows and shadow probes spread over the
+/// ranks too): the same element figures and probes as one process, to
+/// 1e-10 of the largest.
 #[test]
 fn a_spread_estimate_gives_the_one_process_figures() {
     let problem = builtin("cornell").unwrap().unwrap().problem();
@@ -136,6 +137,8 @@ fn a_spread_estimate_gives_the_one_process_figures() {
                 .fold(0.0, f64::max);
             assert!(worst <= 1e-10 * b.max, "{worst:e} of {:e}", b.max);
             assert!((a.max - b.max).abs() <= 1e-10 * b.max);
+            // Shadow probes found on each rank's elements and gathered.
+            assert!(b.probes > 0 && a.probes == b.probes, "{} {}", a.probes, b.probes);
         }
     }
 }

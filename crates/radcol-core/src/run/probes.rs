@@ -97,12 +97,23 @@ pub(crate) fn find(
         .collect()
 }
 
-/// Every rank's probes ([`find`] of the elements it owns), on every rank,
-/// in element order as one process finds them.
-pub(crate) fn gather(ranks: &dyn crate::ranks::Ranks, mine: &[Probe]) -> Vec<Probe> {
+/// Every rank's probes ([`find`] of the elements it owns) with their η per
+/// channel ([`etas`]), on every rank, in element order as one process
+/// finds them.
+pub(crate) fn gather(
+    ranks: &dyn crate::ranks::Ranks,
+    (mine, etas): (&[Probe], &[Vec<f64>]),
+    channels: usize,
+) -> (Vec<Probe>, Vec<Vec<f64>>) {
+    let width = 3 + channels;
     let flat: Vec<f64> = mine
         .iter()
-        .flat_map(|p| [p.element as f64, p.st[0], p.st[1]])
+        .zip(etas)
+        .flat_map(|(p, eta)| {
+            [p.element as f64, p.st[0], p.st[1]]
+                .into_iter()
+                .chain(eta.iter().copied())
+        })
         .collect();
     let counts: Vec<usize> = ranks
         .gather_each(flat.len() as f64)
@@ -111,21 +122,32 @@ pub(crate) fn gather(ranks: &dyn crate::ranks::Ranks, mine: &[Probe]) -> Vec<Pro
         .collect();
     let mut all = vec![0.0; counts.iter().sum()];
     ranks.gather_all(&flat, &counts, &mut all);
-    let mut probes: Vec<Probe> = all
-        .chunks_exact(3)
-        .map(|p| Probe {
-            element: p[0] as usize,
-            st: [p[1], p[2]],
+    let mut found: Vec<(Probe, Vec<f64>)> = all
+        .chunks_exact(width)
+        .map(|p| {
+            let probe = Probe {
+                element: p[0] as usize,
+                st: [p[1], p[2]],
+            };
+            (probe, p[3..].to_vec())
         })
         .collect();
     // Each element's probes come from one rank, in the order found.
-    probes.sort_by_key(|p| p.element);
-    probes
+    found.sort_by_key(|(p, _)| p.element);
+    found.into_iter().unzip()
 }
 
-/// Evaluates η of every channel at `probes` and adds each to its channel's
-/// estimate.
-pub(crate) fn apply(
+/// Adds η at each probe (per channel, [`etas`]) to its channel's estimate.
+pub(crate) fn add(probes: &[Probe], etas: &[Vec<f64>], estimates: &mut [ErrorEstimate]) {
+    for (pr, eta) in probes.iter().zip(etas) {
+        for (est, &eta) in estimates.iter_mut().zip(eta) {
+            est.add_probe(pr.element, eta);
+        }
+    }
+}
+
+/// |η| of every channel at each of `probes` (one vector per probe).
+pub(crate) fn etas(
     probes: &[Probe],
     (disc, quad, visibility): (
         &Arc<Discretization>,
@@ -134,14 +156,13 @@ pub(crate) fn apply(
     ),
     problem: &Problem,
     channels: &[ChannelResult],
-    estimates: &mut [ErrorEstimate],
-) {
+) -> Vec<Vec<f64>> {
     if probes.is_empty() {
-        return;
+        return Vec::new();
     }
     let eval = PointEvaluator::new(disc.clone(), quad.clone(), visibility);
     let mesh = disc.mesh();
-    let etas: Vec<Vec<f64>> = probes
+    probes
         .par_iter()
         .map(|pr| {
             let ([s, t], k) = (pr.st, pr.element);
@@ -166,12 +187,7 @@ pub(crate) fn apply(
                 })
                 .collect()
         })
-        .collect();
-    for (pr, eta) in probes.iter().zip(etas) {
-        for (est, eta) in estimates.iter_mut().zip(eta) {
-            est.add_probe(pr.element, eta);
-        }
-    }
+        .collect()
 }
 
 /// Which elements emit: E > 0 at one of their nodes in some channel.

@@ -77,13 +77,14 @@ pub(super) fn estimate_channels(
     let by_rank = share.as_ref().map(|(r, l, _)| (*r, l.owner.as_slice()));
     let mut estimates = updated.unwrap_or_else(|| estimate_shared(&plan, &inputs, by_rank));
     // Shadows of the direct light between an element's check points.
+    // Over ranks, each finds and evaluates its own elements' probes.
     let ranks = share.as_ref().map(|(r, _, _)| *r);
     let mut found = probes::find(square, &check, &probes::emitting(disc, channels), owned);
+    let mut etas = probes::etas(&found, (disc, &quad, visibility), problem, channels);
     if let Some(ranks) = ranks {
-        found = probes::gather(ranks, &found);
+        (found, etas) = probes::gather(ranks, (&found, &etas), channels.len());
     }
-    let estimating = (disc, &quad, visibility);
-    probes::apply(&found, estimating, problem, channels, &mut estimates);
+    probes::add(&found, &etas, &mut estimates);
     // Approximate visibility: the most the residual at a node or check
     // point can have moved, per unit of ρ max|u| (0 when exact).
     let mut mass = [(square.stats().visibility_bound).max(plan.stats().visibility_bound)];
