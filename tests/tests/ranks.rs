@@ -138,7 +138,12 @@ fn a_spread_estimate_gives_the_one_process_figures() {
             assert!(worst <= 1e-10 * b.max, "{worst:e} of {:e}", b.max);
             assert!((a.max - b.max).abs() <= 1e-10 * b.max);
             // Shadow probes found on each rank's elements and gathered.
-            assert!(b.probes > 0 && a.probes == b.probes, "{} {}", a.probes, b.probes);
+            assert!(
+                b.probes > 0 && a.probes == b.probes,
+                "{} {}",
+                a.probes,
+                b.probes
+            );
         }
     }
 }

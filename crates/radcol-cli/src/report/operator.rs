@@ -83,17 +83,18 @@ fn fmt_ranks(f: &mut fmt::Formatter<'_>, r: &RanksReport) -> fmt::Result {
         gb(total as f64)
     )?;
     for (k, p) in r.per_rank.iter().enumerate() {
-        let busy = p.products_s + p.communication_s;
+        let product = p.products_s + p.gathers_s;
         writeln!(
             f,
-            "    rank {k}    {} rows, {} ({:.1} %), assembly {:.2} s, products {:.2} s, communication {:.2} s ({:.0} % of products and communication)",
+            "    rank {k}    {} rows, {} ({:.1} %), assembly {:.2} s, products {:.2} s of which gathering x {:.2} s ({:.0} %), all communication {:.2} s (waiting for other ranks included)",
             p.rows,
             gb(p.stored_bytes as f64),
             100.0 * p.stored_bytes as f64 / (total as f64).max(1.0),
             p.assembly_s,
-            p.products_s,
+            product,
+            p.gathers_s,
+            if product > 0.0 { 100.0 * p.gathers_s / product } else { 0.0 },
             p.communication_s,
-            if busy > 0.0 { 100.0 * p.communication_s / busy } else { 0.0 }
         )?;
     }
     Ok(())

@@ -37,6 +37,10 @@ pub(crate) struct Layout {
     pub(crate) owner: Vec<u32>,
 }
 
+/// A map between indices (a row to its element, an element to its first
+/// row).
+type Index<'a> = &'a dyn Fn(usize) -> usize;
+
 /// The [`Layout`] of rank `rank` among `size`, from `geometry`'s block
 /// tree (row and column boxes, and the structure of the geometry alone:
 /// `super::radiosity::predict`'s). The cuts balance that tree's predicted
@@ -51,7 +55,7 @@ pub(crate) fn layout(
     geometry: &dyn Structure,
     opts: &HOptions,
     (rank, size): (usize, usize),
-    (element_of, first_row, elements): (&dyn Fn(usize) -> usize, &dyn Fn(usize) -> usize, usize),
+    (element_of, first_row, elements): (Index<'_>, Index<'_>, usize),
 ) -> Layout {
     let rt = ClusterTree::new(row_boxes, opts.leaf_size);
     let ct = ClusterTree::new(col_boxes, opts.leaf_size);
@@ -191,6 +195,8 @@ pub struct RowShare {
     ranks: Arc<dyn Ranks>,
     /// Time in this rank's leaf products.
     product_nanos: AtomicU64,
+    /// Time gathering x for them.
+    gather_nanos: AtomicU64,
 }
 
 impl RowShare {
@@ -226,6 +232,7 @@ impl RowShare {
                 counts,
                 ranks,
                 product_nanos: AtomicU64::new(0),
+                gather_nanos: AtomicU64::new(0),
             },
             size,
         ))
@@ -265,6 +272,12 @@ impl RowShare {
     /// Seconds this rank has spent multiplying its leaves.
     pub fn product_seconds(&self) -> f64 {
         self.product_nanos.load(Ordering::Relaxed) as f64 * 1e-9
+    }
+
+    /// Seconds this rank has spent gathering x for its products (waiting
+    /// for the other ranks included).
+    pub fn gather_seconds(&self) -> f64 {
+        self.gather_nanos.load(Ordering::Relaxed) as f64 * 1e-9
     }
 
     /// This rank's rows of a vector every rank holds whole.
@@ -335,6 +348,7 @@ impl LinearOperator for RowShare {
     /// One gather per vector, then one pass over the leaves held.
     fn apply_many(&self, xs: &[&[f64]], ys: &mut [&mut [f64]]) {
         let n = self.h.stats.shape.1;
+        let gathering = Instant::now();
         let full: Vec<Vec<f64>> = xs
             .iter()
             .map(|x| {
@@ -343,6 +357,8 @@ impl LinearOperator for RowShare {
                 f
             })
             .collect();
+        self.gather_nanos
+            .fetch_add(gathering.elapsed().as_nanos() as u64, Ordering::Relaxed);
         let start = Instant::now();
         let refs: Vec<&[f64]> = full.iter().map(Vec::as_slice).collect();
         let yp = self.h.products(&refs);
@@ -363,6 +379,7 @@ impl Clone for RowShare {
             counts: self.counts.clone(),
             ranks: self.ranks.clone(),
             product_nanos: AtomicU64::new(self.product_nanos.load(Ordering::Relaxed)),
+            gather_nanos: AtomicU64::new(self.gather_nanos.load(Ordering::Relaxed)),
         }
     }
 }

@@ -178,6 +178,9 @@ pub struct RankFigures {
     pub assembly_s: f64,
     /// Seconds multiplying its blocks in GMRES's products.
     pub products_s: f64,
+    /// Seconds gathering x for those products (waiting for the other
+    /// ranks included): the communication of a product.
+    pub gathers_s: f64,
     /// Seconds in collective operations since the process began (gathers
     /// and reductions, waiting for the other ranks included).
     pub communication_s: f64,
@@ -190,13 +193,14 @@ impl RanksReport {
         let each = |v: f64| ranks.gather_each(v);
         let (rows, stored) = (each(mine.rows as f64), each(mine.stored_bytes as f64));
         let (assembly, products) = (each(mine.assembly_s), each(mine.products_s));
-        let communication = each(mine.communication_s);
+        let (gathers, communication) = (each(mine.gathers_s), each(mine.communication_s));
         let per_rank = (0..ranks.size())
             .map(|p| RankFigures {
                 rows: rows[p] as usize,
                 stored_bytes: stored[p] as u64,
                 assembly_s: assembly[p],
                 products_s: products[p],
+                gathers_s: gathers[p],
                 communication_s: communication[p],
             })
             .collect();

@@ -347,6 +347,7 @@ impl Stages<'_> {
                 stored_bytes: s.local().heap_bytes(),
                 assembly_s,
                 products_s: s.product_seconds(),
+                gathers_s: s.gather_seconds(),
                 communication_s: s.ranks().seconds(),
             };
             super::RanksReport::gather(s.ranks(), mine)
