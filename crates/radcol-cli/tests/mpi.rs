@@ -171,7 +171,8 @@ fn cornell_over_ranks_is_the_one_process_solve() {
 }
 
 /// The shadowed floor to 1e-3 over 2 and 3 ranks: the same adaptive
-/// steps (unknowns at each) and the same final values as one process.
+/// steps (unknowns at each), the same final values and the last step's
+/// GMRES iterations as one process.
 #[test]
 fn the_adaptive_loop_over_ranks_takes_the_one_process_steps() {
     let dir = scratch("mpi_shadow");
@@ -196,6 +197,11 @@ fn the_adaptive_loop_over_ranks_takes_the_one_process_steps() {
         let (report, u) = solve(&dir, ranks, &args);
         assert_eq!(world(&report).0, ranks as u64, "the world size");
         assert_eq!(steps(&report), steps(&alone), "{ranks} ranks");
+        assert_eq!(
+            iterations(&report["channels"]),
+            iterations(&alone["channels"]),
+            "the last step's GMRES"
+        );
         let diff = max_rel(&u, &u1);
         assert!(diff <= 1e-10, "{ranks} ranks: {diff:e}");
     }

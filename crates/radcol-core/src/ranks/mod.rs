@@ -28,6 +28,11 @@ pub trait Ranks: Reduce + Send + Sync + std::fmt::Debug {
     fn rank(&self) -> usize;
     /// How many ranks take part.
     fn size(&self) -> usize;
+    /// How many of them share this machine's memory, this one included
+    /// (each plans for its part of the memory available).
+    fn local_size(&self) -> usize {
+        self.size()
+    }
     /// Every rank's `local` (rank p's of length `counts[p]`), one after
     /// the other in rank order, into `all` (of length the sum of `counts`).
     fn gather_all(&self, local: &[f64], counts: &[usize], all: &mut [f64]);

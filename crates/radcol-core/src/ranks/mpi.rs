@@ -43,11 +43,11 @@ impl MpiSession {
                 "the MPI library offers thread support {level:?}; radcol needs Serialized"
             ));
         }
-        let local = universe.world().split_shared(0).size() as usize;
+        let world = Mpi::world();
         Ok(Self {
             _universe: universe,
-            world: std::sync::Arc::new(Mpi::world()),
-            local,
+            local: world.local,
+            world: std::sync::Arc::new(world),
         })
     }
 
@@ -103,16 +103,19 @@ impl MpiSession {
 pub struct Mpi {
     rank: usize,
     size: usize,
+    local: usize,
     nanos: AtomicU64,
 }
 
 impl Mpi {
-    /// This process in the world communicator.
+    /// This process in the world communicator (every rank calls it
+    /// together: finding the ranks on this machine is collective).
     pub fn world() -> Self {
         let w = SimpleCommunicator::world();
         Self {
             rank: w.rank() as usize,
             size: w.size() as usize,
+            local: w.split_shared(0).size() as usize,
             nanos: AtomicU64::new(0),
         }
     }
@@ -146,6 +149,10 @@ impl Ranks for Mpi {
 
     fn size(&self) -> usize {
         self.size
+    }
+
+    fn local_size(&self) -> usize {
+        self.local
     }
 
     fn gather_all(&self, local: &[f64], counts: &[usize], all: &mut [f64]) {

@@ -2,7 +2,7 @@
 //! hierarchical matrix of `crate::hmatrix` (the same entries, far blocks
 //! compressed to a relative tolerance), and why.
 
-use super::size::{available_memory, usable, MemoryEstimate, MemoryUse};
+use super::size::{available_for, usable, MemoryEstimate, MemoryUse};
 use super::{SolveConfig, SolverKind};
 use crate::assembly::plan::Unchanged;
 use crate::assembly::AssemblyPlan;
@@ -206,7 +206,7 @@ pub(crate) fn decide_now(
     unknowns: u64,
     elements: u64,
 ) -> Result<OperatorDecision, InputError> {
-    let available = available_memory();
+    let available = available_for(cfg);
     let d = decide(cfg, unknowns, available)?;
     if !cfg.check_memory {
         return Ok(d);
@@ -297,7 +297,7 @@ pub(crate) fn predict_compressed(
     disc: &Discretization,
     cfg: &SolveConfig,
 ) -> Result<HPrediction, InputError> {
-    let available = available_memory().filter(|_| cfg.check_memory);
+    let available = available_for(cfg).filter(|_| cfg.check_memory);
     let pair_table = crate::assembly::pair_table_bytes(disc.mesh().len() as f64);
     let p = crate::hmatrix::radiosity::predict(disc, &cfg.compression, count_limit(available));
     // Spread over ranks, each holds about its share.
@@ -351,7 +351,7 @@ pub(crate) fn build_compressed(
     if let Some((ranks, held)) = cfg.distributed().zip(held) {
         return super::share::build_share(&entries, cfg, (ranks.clone(), held), decision, memory);
     }
-    let available = available_memory().filter(|_| cfg.check_memory);
+    let available = available_for(cfg).filter(|_| cfg.check_memory);
     // Counted over the plan's block tree before any block is computed;
     // not when blocks are taken from the previous step's operator, where
     // that walk would cost more than the blocks built (the sample below
@@ -376,7 +376,7 @@ pub(crate) fn build_compressed(
     decision.sampled_bytes = Some(sampled);
     decision.sampled_error = Some(h.sampled_error(&entries, SAMPLED_ROWS));
     if cfg.check_memory {
-        memory.check_compressed(&h, available_memory())?;
+        memory.check_compressed(&h, available_for(cfg))?;
     }
     Ok((GeometricOperator::Compressed(h), entries.evaluations()))
 }

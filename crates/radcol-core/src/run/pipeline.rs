@@ -6,7 +6,7 @@ use super::operator::{
     OperatorDecision, OperatorKind,
 };
 use super::relight::Relighter;
-use super::size::{available_memory, MemoryUse};
+use super::size::{available_for, MemoryUse};
 use super::{ChannelResult, SolveConfig, SolveOutcome, Timings};
 use crate::assembly::{AssemblyBackend, AssemblyPlan, BackendInfo, CpuBackend, Unchanged};
 use crate::discretization::Discretization;
@@ -73,7 +73,7 @@ fn assemble(
         decision.predicted_bytes = Some(predict_compressed(disc, cfg)?.bytes());
     }
     if previous.is_none() && cfg.check_memory {
-        let (available, above) = (available_memory(), super::PREDICT_PLAN_ABOVE);
+        let (available, above) = (available_for(cfg), super::PREDICT_PLAN_ABOVE);
         super::cost::check_plan_memory(disc, &cfg.quad, visibility, available, above)?;
     }
     let before = super::size::process_memory().map(|(rss, _)| rss);
@@ -191,7 +191,7 @@ fn settle(
     let mut memory = predict(decision.predicted_bytes);
     let compressed = decision.kind == OperatorKind::Compressed;
     if cfg.check_memory {
-        let available = available_memory();
+        let available = available_for(cfg);
         match memory.check(available) {
             Err(e) if !compressed && decision.switchable => {
                 *decision = decision.compress_instead(&e);
@@ -203,7 +203,7 @@ fn settle(
         }
     }
     let to_come = memory.predicted_peak_bytes - memory.after_plan_bytes;
-    if let Some(d) = lighter_than_dense(decision, disc, cfg, to_come, available_memory()) {
+    if let Some(d) = lighter_than_dense(decision, disc, cfg, to_come, available_for(cfg)) {
         *decision = d;
         memory = predict(decision.predicted_bytes);
     }

@@ -2,7 +2,7 @@
 //! operator, laid out from the geometry and built from its own plan.
 
 use super::operator::{GeometricOperator, OperatorDecision, SAMPLED_ROWS};
-use super::size::{available_memory, MemoryUse};
+use super::size::{available_for, MemoryUse};
 use super::SolveConfig;
 use crate::discretization::Discretization;
 use crate::error::InputError;
@@ -23,7 +23,7 @@ pub(super) fn build_share(
     decision: &mut OperatorDecision,
     memory: &mut MemoryUse,
 ) -> Result<(GeometricOperator, u64), InputError> {
-    let available = available_memory().filter(|_| cfg.check_memory);
+    let available = available_for(cfg).filter(|_| cfg.check_memory);
     let (rows, cols) = entries.boxes();
     let (share, sampled) = RowShare::build(&rows, &cols, entries, &cfg.compression, share, |s| {
         *memory = memory.with_matrix(Some(s.bytes));
@@ -41,7 +41,7 @@ pub(super) fn build_share(
     decision.sampled_bytes = Some(sampled);
     decision.sampled_error = Some(share.sampled_error(entries, SAMPLED_ROWS));
     if cfg.check_memory {
-        memory.check_compressed(share.local(), available_memory())?;
+        memory.check_compressed(share.local(), available_for(cfg))?;
     }
     Ok((GeometricOperator::Shared(share), entries.evaluations()))
 }

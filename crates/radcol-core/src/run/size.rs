@@ -63,6 +63,15 @@ pub fn mesh_size(
     }
 }
 
+/// The memory available to this process's solve: [`available_memory`],
+/// shared evenly among the ranks of a distributed solve that run on this
+/// machine (each plans for its part; taken when the checks run, before the
+/// others have allocated much).
+pub(crate) fn available_for(cfg: &super::SolveConfig) -> Option<u64> {
+    let local = cfg.distributed().map_or(1, |r| r.local_size().max(1)) as u64;
+    available_memory().map(|a| a / local)
+}
+
 /// Bytes of memory available, from /proc/meminfo on Linux.
 pub fn available_memory() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
