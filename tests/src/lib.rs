@@ -188,3 +188,21 @@ pub fn lu_config(degree: usize, level: u32) -> SolveConfig {
         ..Default::default()
     }
 }
+
+/// Max over nodes and channels of |a − b| relative to max |b| (per
+/// channel's largest value): how far two solves of one discretization
+/// differ.
+pub fn max_rel_nodal(
+    a: &radcol_core::run::SolveOutcome,
+    b: &radcol_core::run::SolveOutcome,
+) -> f64 {
+    let mut worst = 0.0f64;
+    for (ca, cb) in a.channels.iter().zip(&b.channels) {
+        let (ua, ub) = (ca.solution.nodal(), cb.solution.nodal());
+        let scale = ub.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (x, y) in ua.iter().zip(ub) {
+            worst = worst.max((x - y).abs() / scale);
+        }
+    }
+    worst
+}

@@ -17,6 +17,7 @@ use radcol_core::run::{
     solve, OperatorChoice, OperatorKind, Relighter, SolveConfig, SolveOutcome, SolverKind,
 };
 use radcol_core::scene::builtin;
+use radcol_tests::max_rel_nodal as max_rel;
 use std::sync::Arc;
 
 fn config(operator: OperatorChoice, tol: f64, level: u32, max_edge: Option<f64>) -> SolveConfig {
@@ -35,19 +36,6 @@ fn config(operator: OperatorChoice, tol: f64, level: u32, max_edge: Option<f64>)
 
 fn scene(name: &str) -> Arc<Surface> {
     builtin(name).unwrap().unwrap().surface.clone()
-}
-
-/// Max over nodes and channels of |a − b| relative to max |b|.
-fn max_rel(a: &SolveOutcome, b: &SolveOutcome) -> f64 {
-    let mut worst = 0.0f64;
-    for (ca, cb) in a.channels.iter().zip(&b.channels) {
-        let (ua, ub) = (ca.solution.nodal(), cb.solution.nodal());
-        let scale = ub.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for (x, y) in ua.iter().zip(ub) {
-            worst = worst.max((x - y).abs() / scale);
-        }
-    }
-    worst
 }
 
 fn compressed(p: &Problem, tol: f64, level: u32, max_edge: Option<f64>) -> SolveOutcome {

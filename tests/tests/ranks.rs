@@ -16,6 +16,7 @@ use radcol_core::problem::Problem;
 use radcol_core::ranks::{Ranks, Threads};
 use radcol_core::run::{solve, OperatorChoice, SolveConfig, SolveOutcome, SolverKind};
 use radcol_core::scene::builtin;
+use radcol_tests::max_rel_nodal as max_rel;
 use std::sync::Arc;
 
 fn config(ranks: Option<Arc<dyn Ranks>>) -> SolveConfig {
@@ -33,8 +34,13 @@ fn config(ranks: Option<Arc<dyn Ranks>>) -> SolveConfig {
     }
 }
 
-/// Every rank's outcome of `cfg` (with its ranks set) over `size` threads.
-fn spread(problem: &Problem, size: usize, cfg: &SolveConfig) -> Vec<Result<SolveOutcome, Error>> {
+/// `run` on each of `size` thread ranks, with `cfg` and its rank set:
+/// every rank's result.
+fn on_ranks<T: Send>(
+    size: usize,
+    cfg: &SolveConfig,
+    run: impl Fn(&SolveConfig) -> T + Sync,
+) -> Vec<T> {
     std::thread::scope(|s| {
         let handles: Vec<_> = Threads::new(size)
             .into_iter()
@@ -43,24 +49,17 @@ fn spread(problem: &Problem, size: usize, cfg: &SolveConfig) -> Vec<Result<Solve
                     ranks: Some(Arc::new(rank) as Arc<dyn Ranks>),
                     ..cfg.clone()
                 };
-                s.spawn(move || solve(problem, &cfg, &CpuBackend))
+                let run = &run;
+                s.spawn(move || run(&cfg))
             })
             .collect();
         handles.into_iter().map(|h| h.join().unwrap()).collect()
     })
 }
 
-/// Max over nodes and channels of |a − b| relative to max |b|.
-fn max_rel(a: &SolveOutcome, b: &SolveOutcome) -> f64 {
-    let mut worst = 0.0f64;
-    for (ca, cb) in a.channels.iter().zip(&b.channels) {
-        let (ua, ub) = (ca.solution.nodal(), cb.solution.nodal());
-        let scale = ub.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for (x, y) in ua.iter().zip(ub) {
-            worst = worst.max((x - y).abs() / scale);
-        }
-    }
-    worst
+/// Every rank's outcome of `cfg` over `size` thread ranks.
+fn spread(problem: &Problem, size: usize, cfg: &SolveConfig) -> Vec<Result<SolveOutcome, Error>> {
+    on_ranks(size, cfg, |cfg| solve(problem, cfg, &CpuBackend))
 }
 
 #[test]
@@ -169,19 +168,7 @@ fn a_spread_adaptive_loop_takes_the_one_process_steps() {
     let alone = run(&cfg).unwrap();
     println!("one process: steps {:?}", unknowns(&alone));
     assert!(alone.steps.len() >= 3, "{:?}", unknowns(&alone));
-    let outs: Vec<AdaptOutcome> = std::thread::scope(|s| {
-        let handles: Vec<_> = Threads::new(2)
-            .into_iter()
-            .map(|rank| {
-                let cfg = SolveConfig {
-                    ranks: Some(Arc::new(rank) as Arc<dyn Ranks>),
-                    ..cfg.clone()
-                };
-                s.spawn(move || run(&cfg).unwrap())
-            })
-            .collect();
-        handles.into_iter().map(|h| h.join().unwrap()).collect()
-    });
+    let outs: Vec<AdaptOutcome> = on_ranks(2, &cfg, |cfg| run(cfg).unwrap());
     for out in &outs {
         assert_eq!(unknowns(out), unknowns(&alone));
         assert_eq!(out.stop, alone.stop);
