@@ -9,7 +9,7 @@
 //! (MPI_Abort). Without the feature, or started without mpirun, there is
 //! one rank.
 
-use radcol_core::ranks::Ranks;
+use radcol_core::run::Ranks;
 use std::sync::{Arc, OnceLock};
 
 /// The world's ranks, when more than one runs this command.
@@ -24,7 +24,7 @@ const WAIT_FOR_THE_OTHERS: std::time::Duration = std::time::Duration::from_secs(
 #[derive(Debug)]
 pub struct Session {
     #[cfg(feature = "mpi")]
-    mpi: radcol_core::ranks::MpiSession,
+    mpi: radcol_core::run::MpiSession,
 }
 
 impl Session {
@@ -36,7 +36,7 @@ impl Session {
     pub fn start() -> Result<Self, String> {
         #[cfg(feature = "mpi")]
         {
-            let mpi = radcol_core::ranks::MpiSession::start()?;
+            let mpi = radcol_core::run::MpiSession::start()?;
             let world = mpi.world();
             if world.size() > 1 {
                 let _ = RANKS.set(world);

@@ -46,6 +46,9 @@ pub use crate::nodes::{check_alpha, check_degree, nodes_per_element, NodeSet};
 pub use crate::norms::ErrorNorms;
 pub use crate::problem::{Field, Problem, ReferenceOperator};
 pub use crate::progress::{Cancel, Progress, ProgressHandle};
+#[cfg(feature = "mpi")]
+pub use crate::ranks::{Mpi, MpiSession};
+pub use crate::ranks::{Ranks, Threads};
 pub use crate::solution::{Limited, Solution};
 pub use crate::solve::GmresParams;
 pub use crate::visibility::{analyze as analyze_visibility, VisibilityAnalysis};

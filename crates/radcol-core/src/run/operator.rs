@@ -326,7 +326,8 @@ fn count_limit(available: Option<u64>) -> f64 {
 }
 
 /// Builds the compressed operator from `plan`'s integrators (in a solve
-/// spread over ranks, this rank's share: the rows `held`), measures its
+/// spread over ranks, `super::share::build_share` builds a rank's share
+/// instead), measures its
 /// product error at [`SAMPLED_ROWS`] rows into `decision`, and puts its
 /// predicted size into `memory`; returns it with its kernel evaluations.
 /// Its size is predicted twice before it is built: from the plan before
@@ -343,14 +344,10 @@ pub(crate) fn build_compressed(
     plan: &AssemblyPlan,
     cfg: &SolveConfig,
     previous: Option<(&HMatrix, &Unchanged)>,
-    held: Option<std::ops::Range<usize>>,
     decision: &mut OperatorDecision,
     memory: &mut MemoryUse,
 ) -> Result<(GeometricOperator, u64), InputError> {
     let entries = PlanEntries::new(plan);
-    if let Some((ranks, held)) = cfg.distributed().zip(held) {
-        return super::share::build_share(&entries, cfg, (ranks.clone(), held), decision, memory);
-    }
     let available = available_for(cfg).filter(|_| cfg.check_memory);
     // Counted over the plan's block tree before any block is computed;
     // not when blocks are taken from the previous step's operator, where

@@ -115,9 +115,15 @@ fn assemble(
     let dense_previous = previous.and_then(|p| p.outcome.operator.dense());
     let (operator, kernel_evals, device_seconds, info) = if compressed {
         let reuse = previous.and_then(|p| Some((p.outcome.operator.compressed()?, &*p.unchanged)));
-        let held = layout.as_ref().map(|l| l.held.clone());
-        let (operator, evals) =
-            build_compressed(&plan, cfg, reuse, held, &mut decision, &mut memory)?;
+        let share = cfg.distributed().zip(layout.as_ref());
+        let (operator, evals) = match share {
+            Some((ranks, l)) => {
+                let entries = crate::hmatrix::radiosity::PlanEntries::new(&plan);
+                let share = (ranks.clone(), l.held.clone());
+                super::share::build_share(&entries, cfg, share, &mut decision, &mut memory)?
+            }
+            None => build_compressed(&plan, cfg, reuse, &mut decision, &mut memory)?,
+        };
         (operator, evals, None, CpuBackend.info())
     } else {
         let assembled = match dense_previous {
