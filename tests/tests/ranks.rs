@@ -200,3 +200,35 @@ fn a_spread_solve_refuses_the_dense_operator_and_lu() {
         }
     }
 }
+
+/// More ranks than unknowns: every rank refuses alike, in one error that
+/// says how many of each (nothing hangs on a rank with no rows).
+#[test]
+fn more_ranks_than_unknowns_are_refused_on_every_rank() {
+    use radcol_core::geometry::shapes::sphere;
+    use radcol_core::problem::Field;
+    let problem = Problem::new(
+        Arc::new(sphere(1.0)),
+        Field::Constant(0.5),
+        Field::Constant(1.0),
+    );
+    let cfg = SolveConfig {
+        degree: 0,
+        level: 0,
+        max_edge: None,
+        ..config(None)
+    };
+    for out in spread(&problem, 9, &cfg) {
+        let err = out.unwrap_err();
+        assert!(
+            matches!(
+                err,
+                Error::Input(InputError::TooFewRows {
+                    unknowns: 8,
+                    ranks: 9
+                })
+            ),
+            "{err}"
+        );
+    }
+}
