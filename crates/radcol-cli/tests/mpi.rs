@@ -15,7 +15,18 @@ use common::{radcol_bin, scratch};
 use serde_json::Value;
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
+
+/// One MPI job at a time: ranks waiting in a collective spin, so jobs run
+/// side by side on a 2-core machine starve each other's ranks for seconds
+/// (a failing rank then gives up waiting for the others to fail alike and
+/// ends the world alone: another exit code). Each test holds this.
+static ONE_JOB_AT_A_TIME: Mutex<()> = Mutex::new(());
+
+fn one_job_at_a_time() -> std::sync::MutexGuard<'static, ()> {
+    ONE_JOB_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner())
+}
 
 /// `mpirun -q -np ranks radcol args` (one thread per rank), or the binary
 /// alone when `ranks` is 0. `-q`: OpenMPI's own notes about exit codes
@@ -118,6 +129,7 @@ fn world(report: &Value) -> (u64, Vec<u64>) {
 /// 60 % of the one-process operator; a relit set the same as well.
 #[test]
 fn cornell_over_ranks_is_the_one_process_solve() {
+    let _one = one_job_at_a_time();
     let dir = scratch("mpi_cornell");
     let args = [
         "cornell",
@@ -175,6 +187,7 @@ fn cornell_over_ranks_is_the_one_process_solve() {
 /// GMRES iterations as one process.
 #[test]
 fn the_adaptive_loop_over_ranks_takes_the_one_process_steps() {
+    let _one = one_job_at_a_time();
     let dir = scratch("mpi_shadow");
     let args = [
         "shadow",
@@ -225,6 +238,7 @@ fn failing(ranks: usize, args: &[&str]) -> (Vec<String>, Option<i32>, Duration) 
 /// one error line, exit code 2, every rank gone within 10 s.
 #[test]
 fn bad_input_under_mpirun_is_one_line() {
+    let _one = one_job_at_a_time();
     let missing = ["solve", "no_such_scene.obj"];
     let nan = [
         "solve",
@@ -264,6 +278,7 @@ fn children(pid: u32) -> Vec<u32> {
 /// within 10 s; no rank is left running.
 #[test]
 fn a_rank_killed_mid_assembly_ends_the_run() {
+    let _one = one_job_at_a_time();
     let mut child = Command::new("mpirun")
         .args(["-q", "--oversubscribe", "-np", "2"])
         .arg(radcol_bin())
