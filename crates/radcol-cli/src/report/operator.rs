@@ -86,11 +86,14 @@ fn fmt_ranks(f: &mut fmt::Formatter<'_>, r: &RanksReport) -> fmt::Result {
         let product = p.products_s + p.gathers_s;
         writeln!(
             f,
-            "    rank {k}    {} rows, {} ({:.1} %), assembly {:.2} s, products {:.2} s of which gathering x {:.2} s ({:.0} %), all communication {:.2} s (waiting for other ranks included)",
+            "    rank {k}    {} rows, {} ({:.1} %), {:.3e} kernel evaluations, assembly {:.2} s (its own work {:.2} s{}), products {:.2} s of which gathering x {:.2} s ({:.0} %), all communication {:.2} s (waiting for other ranks included)",
             p.rows,
             gb(p.stored_bytes as f64),
             100.0 * p.stored_bytes as f64 / (total as f64).max(1.0),
+            p.kernel_evals as f64,
             p.assembly_s,
+            p.work_s,
+            p.work_cpu_s.map_or(String::new(), |c| format!(", {c:.2} s of CPU")),
             product,
             p.gathers_s,
             if product > 0.0 { 100.0 * p.gathers_s / product } else { 0.0 },

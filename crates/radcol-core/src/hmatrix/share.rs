@@ -197,6 +197,9 @@ pub struct RowShare {
     product_nanos: AtomicU64,
     /// Time gathering x for them.
     gather_nanos: AtomicU64,
+    /// When this rank's own part of the build ended (before it first
+    /// waited for the others), and the process's CPU seconds then.
+    built: (Instant, Option<f64>),
 }
 
 impl RowShare {
@@ -219,6 +222,7 @@ impl RowShare {
         let share = Some(held);
         let (h, size) =
             HMatrix::build_part(row_boxes, col_boxes, entries, opts, None, share, check)?;
+        let built = (Instant::now(), crate::ranks::cpu_seconds());
         let rows = h.rt.order[h.held.clone()].to_vec();
         let counts = ranks
             .gather_each(rows.len() as f64)
@@ -233,6 +237,7 @@ impl RowShare {
                 ranks,
                 product_nanos: AtomicU64::new(0),
                 gather_nanos: AtomicU64::new(0),
+                built,
             },
             size,
         ))
@@ -267,6 +272,13 @@ impl RowShare {
     /// The ranks it is spread over.
     pub fn ranks(&self) -> &dyn Ranks {
         &*self.ranks
+    }
+
+    /// When this rank's own part of the build ended, before it first
+    /// waited for another rank, and the process's CPU seconds then
+    /// (`crate::ranks::cpu_seconds`).
+    pub(crate) fn built(&self) -> (Instant, Option<f64>) {
+        self.built
     }
 
     /// Seconds this rank has spent multiplying its leaves.
@@ -380,6 +392,7 @@ impl Clone for RowShare {
             ranks: self.ranks.clone(),
             product_nanos: AtomicU64::new(self.product_nanos.load(Ordering::Relaxed)),
             gather_nanos: AtomicU64::new(self.gather_nanos.load(Ordering::Relaxed)),
+            built: self.built,
         }
     }
 }

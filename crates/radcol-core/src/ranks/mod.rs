@@ -41,6 +41,21 @@ pub trait Ranks: Reduce + Send + Sync + std::fmt::Debug {
     fn seconds(&self) -> f64;
 }
 
+/// CPU seconds this process has run so far, all its threads together
+/// (Linux: the sum of `/proc/self/task/*/schedstat`'s run times, in
+/// nanoseconds); None where the platform does not say. Unlike wall time,
+/// it does not grow while ranks sharing a core wait for it, so it measures
+/// a rank's own work when ranks outnumber cores.
+pub(crate) fn cpu_seconds() -> Option<f64> {
+    let tasks = std::fs::read_dir("/proc/self/task").ok()?;
+    let mut nanos = 0u64;
+    for task in tasks.flatten() {
+        let text = std::fs::read_to_string(task.path().join("schedstat")).ok()?;
+        nanos += text.split_whitespace().next()?.parse::<u64>().ok()?;
+    }
+    Some(nanos as f64 * 1e-9)
+}
+
 impl dyn Ranks + '_ {
     /// One number from every rank, in rank order.
     pub fn gather_each(&self, value: f64) -> Vec<f64> {

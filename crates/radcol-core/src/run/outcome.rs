@@ -174,8 +174,18 @@ pub struct RankFigures {
     pub rows: usize,
     /// Bytes of the operator's numbers it stored.
     pub stored_bytes: u64,
-    /// Seconds of its assembly (plan and its share of the blocks).
+    /// Seconds of its assembly (plan and its share of the blocks), up to
+    /// the end of the slowest rank's.
     pub assembly_s: f64,
+    /// Seconds of its own part of the assembly, before it first waits
+    /// for another rank: its plan and its blocks (wall time).
+    pub work_s: f64,
+    /// CPU seconds of that work (all its threads), where the platform
+    /// says: the measure of its share of the work when ranks outnumber
+    /// cores and wall times include turns taken on a shared core.
+    pub work_cpu_s: Option<f64>,
+    /// Kernel evaluations of its blocks.
+    pub kernel_evals: u64,
     /// Seconds multiplying its blocks in GMRES's products.
     pub products_s: f64,
     /// Seconds gathering x for those products (waiting for the other
@@ -194,11 +204,16 @@ impl RanksReport {
         let (rows, stored) = (each(mine.rows as f64), each(mine.stored_bytes as f64));
         let (assembly, products) = (each(mine.assembly_s), each(mine.products_s));
         let (gathers, communication) = (each(mine.gathers_s), each(mine.communication_s));
+        let (work, cpu) = (each(mine.work_s), each(mine.work_cpu_s.unwrap_or(f64::NAN)));
+        let evals = each(mine.kernel_evals as f64);
         let per_rank = (0..ranks.size())
             .map(|p| RankFigures {
                 rows: rows[p] as usize,
                 stored_bytes: stored[p] as u64,
                 assembly_s: assembly[p],
+                work_s: work[p],
+                work_cpu_s: Some(cpu[p]).filter(|c| c.is_finite()),
+                kernel_evals: evals[p] as u64,
                 products_s: products[p],
                 gathers_s: gathers[p],
                 communication_s: communication[p],

@@ -306,6 +306,7 @@ impl Stages<'_> {
         let rhs_s = t.elapsed().as_secs_f64();
 
         let t = Instant::now();
+        let cpu = cfg.distributed().and_then(|_| crate::ranks::cpu_seconds());
         let built = assemble(
             &disc,
             cfg,
@@ -314,7 +315,7 @@ impl Stages<'_> {
             self.previous,
             problem.channels.len(),
         )?;
-        let assembly_s = t.elapsed().as_secs_f64();
+        let (assembly_s, t_assembly) = (t.elapsed().as_secs_f64(), t);
         Error::if_cancelled(cfg.progress.as_ref(), "assembly")?;
 
         let t = Instant::now();
@@ -348,10 +349,14 @@ impl Stages<'_> {
         }
 
         let ranks = built.operator.shared().map(|s| {
+            let (end, end_cpu) = s.built();
             let mine = super::RankFigures {
                 rows: s.rows().len(),
                 stored_bytes: s.local().heap_bytes(),
                 assembly_s,
+                work_s: end.duration_since(t_assembly).as_secs_f64(),
+                work_cpu_s: cpu.zip(end_cpu).map(|(a, b)| b - a),
+                kernel_evals: built.kernel_evals,
                 products_s: s.product_seconds(),
                 gathers_s: s.gather_seconds(),
                 communication_s: s.ranks().seconds(),
