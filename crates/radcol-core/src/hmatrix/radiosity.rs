@@ -453,10 +453,12 @@ impl Structure for Geometry<'_> {
 }
 
 /// Rank `rank`'s share among `size` of the compressed geometric matrix of
-/// `disc`, decided from the geometry ([`super::share::layout`]).
+/// `disc`, decided from the geometry and `extra`, a cost per row (unknown)
+/// that the geometry does not see ([`super::share::layout`]).
 pub(crate) fn layout(
     disc: &Discretization,
     opts: &HOptions,
+    extra: &[f64],
     (rank, size): (usize, usize),
 ) -> super::share::Layout {
     let (rows, cols) = boxes(disc);
@@ -464,6 +466,7 @@ pub(crate) fn layout(
         (&rows, &cols),
         &Geometry::new(disc),
         opts,
+        extra,
         (rank, size),
         (&|i| disc.element_of(i), &|k| disc.offset(k), disc.mesh().len()),
     )

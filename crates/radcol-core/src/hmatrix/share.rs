@@ -44,7 +44,7 @@ type Index<'a> = &'a dyn Fn(usize) -> usize;
 /// The [`Layout`] of rank `rank` among `size`, from `geometry`'s block
 /// tree (row and column boxes, and the structure of the geometry alone:
 /// `super::radiosity::predict`'s). The cuts balance that tree's predicted
-/// cost ([`cuts`]); the classified elements are those of the rows held,
+/// cost plus `extra` per row ([`cuts`]); the classified elements are those of the rows held,
 /// and of the row cluster of every block the geometry finds admissible
 /// that meets the rows held without lying inside them: the block tree
 /// asks there, or below, whether the occlusion lets it stay low rank,
@@ -54,6 +54,7 @@ pub(crate) fn layout(
     (row_boxes, col_boxes): (&[Aabb], &[Aabb]),
     geometry: &dyn Structure,
     opts: &HOptions,
+    extra: &[f64],
     (rank, size): (usize, usize),
     (element_of, first_row, elements): (Index<'_>, Index<'_>, usize),
 ) -> Layout {
@@ -76,7 +77,7 @@ pub(crate) fn layout(
             )
         })
         .collect();
-    let cut = cuts(&rt, &ct, &blocks, &zero, size);
+    let cut = cuts(&rt, &ct, (&blocks, &zero), extra, size);
     let held = cut[rank]..cut[rank + 1];
     let mut classified = vec![false; elements];
     let mut mark = |rows: Range<usize>| {
@@ -114,7 +115,8 @@ pub(crate) fn layout(
 /// from 0 to the number of rows, rank p holding `cuts[p]..cuts[p + 1]`.
 /// Each block's predicted cost (a dense leaf its entries, a low-rank block
 /// [`NOMINAL_RANK`] (m + n), a zero block nothing) is spread evenly over
-/// its rows, and the cuts fall on the starts of the row tree's leaves
+/// its rows, `extra[i]` is added to row i's (original index: work the
+/// geometry does not see, such as visibility), and the cuts fall on the starts of the row tree's leaves
 /// nearest to equal shares of the total, so that a dense leaf is never
 /// split and only low-rank blocks of large clusters straddle a cut (their
 /// rank on each side computes them whole and keeps them); with fewer
@@ -122,31 +124,12 @@ pub(crate) fn layout(
 pub(super) fn cuts(
     rt: &ClusterTree,
     ct: &ClusterTree,
-    blocks: &[(usize, usize, bool)],
-    zero: &[bool],
+    (blocks, zero): (&[(usize, usize, bool)], &[bool]),
+    extra: &[f64],
     size: usize,
 ) -> Vec<usize> {
+    let before = cumulative_cost(rt, ct, (blocks, zero), extra);
     let m = rt.order.len();
-    // Cost per row as a difference array of densities.
-    let mut density = vec![0.0; m + 1];
-    for (&(r, c, admissible), &z) in blocks.iter().zip(zero) {
-        let (rc, cc) = (&rt.clusters[r], &ct.clusters[c]);
-        let (rows, cols) = (rc.len() as f64, cc.len() as f64);
-        let cost = match (z, admissible) {
-            (true, _) => 0.0,
-            (false, true) => NOMINAL_RANK * (rows + cols),
-            (false, false) => rows * cols,
-        };
-        density[rc.start] += cost / rows;
-        density[rc.end] -= cost / rows;
-    }
-    // Cumulative cost before each row.
-    let mut before = vec![0.0; m + 1];
-    let mut d = 0.0;
-    for i in 0..m {
-        d += density[i];
-        before[i + 1] = before[i] + d;
-    }
     let total = before[m];
     let mut starts: Vec<usize> = rt
         .clusters
@@ -179,6 +162,38 @@ pub(super) fn cuts(
     }
     cuts.push(m);
     cuts
+}
+
+/// The predicted cost of the rows before each position of the row order
+/// (`m + 1` sums): [`cuts`]'s model.
+fn cumulative_cost(
+    rt: &ClusterTree,
+    ct: &ClusterTree,
+    (blocks, zero): (&[(usize, usize, bool)], &[bool]),
+    extra: &[f64],
+) -> Vec<f64> {
+    let m = rt.order.len();
+    // Cost per row as a difference array of densities.
+    let mut density = vec![0.0; m + 1];
+    for (&(r, c, admissible), &z) in blocks.iter().zip(zero) {
+        let (rc, cc) = (&rt.clusters[r], &ct.clusters[c]);
+        let (rows, cols) = (rc.len() as f64, cc.len() as f64);
+        let cost = match (z, admissible) {
+            (true, _) => 0.0,
+            (false, true) => NOMINAL_RANK * (rows + cols),
+            (false, false) => rows * cols,
+        };
+        density[rc.start] += cost / rows;
+        density[rc.end] -= cost / rows;
+    }
+    // Cumulative cost before each row.
+    let mut before = vec![0.0; m + 1];
+    let mut d = 0.0;
+    for i in 0..m {
+        d += density[i];
+        before[i + 1] = before[i] + d + extra.get(rt.order[i]).copied().unwrap_or(0.0);
+    }
+    before
 }
 
 /// One rank's share of a hierarchical matrix's rows, as an operator on
@@ -394,5 +409,50 @@ impl Clone for RowShare {
             gather_nanos: AtomicU64::new(self.gather_nanos.load(Ordering::Relaxed)),
             built: self.built,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+
+    /// Points on a line, nothing zero: the cuts' cost from the geometry,
+    /// with or without work per row that the geometry does not see.
+    fn cuts_of(extra: &[f64], size: usize) -> Vec<usize> {
+        let boxes: Vec<Aabb> = (0..extra.len())
+            .map(|i| {
+                let p = DVec3::new(i as f64, 0.0, 0.0);
+                Aabb { lo: p, hi: p }
+            })
+            .collect();
+        let opts = HOptions {
+            leaf_size: 4,
+            ..HOptions::default()
+        };
+        let (rt, ct) = (ClusterTree::new(&boxes, 4), ClusterTree::new(&boxes, 4));
+        struct Nothing;
+        impl Structure for Nothing {}
+        let mut blocks = Vec::new();
+        let _ = visit_blocks(&rt, &ct, &Nothing, &opts, &mut |_, _| false, &mut |_, _, r, c, a| {
+            blocks.push((r, c, a));
+            ControlFlow::Continue(())
+        });
+        let zero = vec![false; blocks.len()];
+        cuts(&rt, &ct, (&blocks, &zero), extra, size)
+    }
+
+    #[test]
+    fn work_the_geometry_does_not_see_moves_the_cuts() {
+        let n = 256;
+        let even = cuts_of(&vec![0.0; n], 2);
+        // Rows of one half of the line cost far more: the cut moves into
+        // that half, near its middle (a quarter of the rows on one side).
+        let heavy: Vec<f64> = (0..n).map(|i| if i < n / 2 { 1e4 } else { 0.0 }).collect();
+        let skewed = cuts_of(&heavy, 2);
+        let off_middle = |c: &[usize]| (c[1] as f64 - n as f64 / 2.0).abs() / n as f64;
+        assert!(off_middle(&even) <= 0.1, "{even:?}");
+        assert!((off_middle(&skewed) - 0.25).abs() <= 0.1, "{skewed:?}");
+        assert_eq!((skewed[0], skewed[2]), (0, n), "{skewed:?}");
     }
 }

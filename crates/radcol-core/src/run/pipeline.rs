@@ -81,7 +81,7 @@ fn assemble(
     let layout = cfg
         .distributed()
         .filter(|_| compressed)
-        .map(|r| super::share::share_layout(disc, cfg, &**r));
+        .map(|r| super::share::share_layout(disc, cfg, visibility, &**r));
     let plan = plan_of(disc, cfg, visibility, previous, layout.as_ref());
     // What building the plan cost the process (its heap with the
     // allocator's overhead: 25 % more on Cornell), where that is measured.
