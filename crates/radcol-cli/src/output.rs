@@ -43,6 +43,7 @@ pub fn write_all(
             written.push(Written {
                 path,
                 what,
+                value: value_of(o.kind, out),
                 seconds: t.elapsed().as_secs_f64(),
             });
             continue;
@@ -98,6 +99,7 @@ pub fn write_all(
         written.push(Written {
             path,
             what,
+            value: value_of(o.kind, out),
             seconds: t.elapsed().as_secs_f64(),
         });
     }
@@ -168,8 +170,27 @@ fn write_error_map(o: &Output, look: &Look, out: &SolveOutcome, t: Instant) -> R
             "{}×{} error map (estimated max error / max |u| per element, log scale 1e{lo} .. 1e{hi})",
             img.width, img.height
         ),
+        value: value_of(o.kind, out),
         seconds: t.elapsed().as_secs_f64(),
     })
+}
+
+/// Which value of the solution an output of kind `kind` carries, in the
+/// report's words. The CSV holds u_n at the nodes as computed; images,
+/// vertex meshes and lightmaps show u_n sampled wherever they need it,
+/// limited where it dips below zero (unless --keep-negative). Not û_n =
+/// E + K u_n, the better value at a point: it costs a row of K per point
+/// (about 2 ms on the default Cornell box, 2 cores), hours for the
+/// hundreds of thousands of samples of an image or a lightmap; `--at`
+/// gives it, with its estimate, at the points asked for.
+pub fn value_of(kind: OutputKind, out: &SolveOutcome) -> String {
+    let limited = out.channels.iter().any(|c| c.limited.is_some());
+    match kind {
+        OutputKind::Csv => "u_n at the nodes, as computed".into(),
+        OutputKind::ErrorMap => "the estimated error of u_n per element".into(),
+        _ if limited => "u_n, scaled towards element means where it dipped below 0".into(),
+        _ => "u_n".into(),
+    }
 }
 
 /// A per-element value at every vertex of `vm` (through its triangles).

@@ -619,6 +619,19 @@ fn solve_cornell_writes_every_output() {
     assert_eq!(v["out"].as_array().unwrap().len(), names.len());
     let elements = v["elements"].as_u64().unwrap() as usize;
     assert_eq!(elements, 50);
+    // Each output says which value it carries: the CSV u_n as computed,
+    // the others u_n as shown, limited where the solve limited it (here,
+    // at the blocks' feet).
+    let channels = v["channels"].as_array().unwrap();
+    let limited = channels.iter().any(|c| !c["limited"].is_null());
+    assert!(limited, "the case tests nothing");
+    for (o, n) in v["out"].as_array().unwrap().iter().zip(names) {
+        let value = o["value"].as_str().unwrap();
+        match n {
+            "c.csv" => assert_eq!(value, "u_n at the nodes, as computed"),
+            _ => assert!(value.starts_with("u_n, scaled towards"), "{n}: {value}"),
+        }
+    }
 
     // PNG: the asked size, and the box is lit (the centre ray meets the back wall).
     let decoder = png::Decoder::new(std::io::BufReader::new(

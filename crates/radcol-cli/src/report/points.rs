@@ -68,7 +68,10 @@ impl fmt::Display for PointsReport {
             secs(self.seconds)
         )?;
         if let Some(w) = &self.written {
-            writeln!(f, "  wrote the point values to {w}")?;
+            writeln!(
+                f,
+                "  wrote the point values to {w} (u_n and û_n, each with its estimated error)"
+            )?;
         }
         if !self.listed {
             return Ok(());

@@ -20,6 +20,8 @@ pub struct Written {
     pub path: String,
     /// What it holds, one phrase ("38 node rows", "640×480 image").
     pub what: String,
+    /// Which value of the solution it carries ([`crate::output::value_of`]).
+    pub value: String,
     /// Seconds spent making and writing it.
     pub seconds: f64,
 }
@@ -468,7 +470,14 @@ impl fmt::Display for SolveReport {
             write!(f, "{p}")?;
         }
         for w in &self.out {
-            writeln!(f, "  wrote {} to {} ({})", w.what, w.path, secs(w.seconds))?;
+            writeln!(
+                f,
+                "  wrote {} to {} ({}; {})",
+                w.what,
+                w.path,
+                w.value,
+                secs(w.seconds)
+            )?;
         }
         for w in &self.warnings {
             writeln!(f, "  warning: {w}")?;
