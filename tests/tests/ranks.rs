@@ -96,6 +96,20 @@ fn shared_rows_give_the_one_process_solution() {
             );
             assert!(diff <= 1e-10, "rank {rank} of {size}: {diff:e}");
             assert_eq!(iters, alone_iters, "rank {rank} of {size}");
+            // Every rank's figures, the same on each: its own work ends
+            // before the assembly it waited in; ranks that share a process
+            // have no CPU seconds of their own.
+            let report = out.ranks.as_ref().expect("the ranks' figures");
+            let mine = &report.per_rank[rank];
+            assert_eq!((report.size, mine.rows), (size, share.rows().len()));
+            assert!(
+                mine.work_s > 0.0 && mine.work_s <= mine.assembly_s,
+                "{mine:?}"
+            );
+            assert!(
+                mine.work_cpu_s.is_none() && mine.kernel_evals > 0,
+                "{mine:?}"
+            );
             assert!(
                 (held as f64) < 0.8 * whole.stored as f64,
                 "rank {rank} of {size} holds {held} of {}",

@@ -111,14 +111,20 @@ fn solve(dir: &Path, ranks: usize, args: &[&str]) -> (Value, Vec<Vec<f64>>) {
     (report, nodal(&csv))
 }
 
-/// The world size a report says ran, and each rank's stored bytes.
+/// The world size a report says ran, and each rank's stored bytes. Each
+/// rank is a process of its own: its own work has CPU seconds, at most its
+/// wall seconds times the threads it ran (one) with a margin for MPI's.
 fn world(report: &Value) -> (u64, Vec<u64>) {
     let r = &report["operator"]["ranks"];
     let per: Vec<u64> = r["per_rank"]
         .as_array()
         .unwrap_or_else(|| panic!("no ranks in {}", report["operator"]))
         .iter()
-        .map(|p| p["stored_bytes"].as_u64().unwrap())
+        .map(|p| {
+            let (cpu, wall) = (p["work_cpu_s"].as_f64(), p["work_s"].as_f64().unwrap());
+            assert!(cpu.is_some_and(|c| c > 0.0 && c <= 1.5 * wall + 0.1), "{p}");
+            p["stored_bytes"].as_u64().unwrap()
+        })
         .collect();
     (r["size"].as_u64().unwrap(), per)
 }

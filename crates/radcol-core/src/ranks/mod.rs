@@ -39,6 +39,12 @@ pub trait Ranks: Reduce + Send + Sync + std::fmt::Debug {
     /// Seconds this rank has spent in collective operations so far,
     /// waiting for the other ranks included.
     fn seconds(&self) -> f64;
+    /// Whether this rank is a process of its own, so that the process's
+    /// CPU seconds are this rank's ([`cpu_seconds`]); false for ranks that
+    /// share one process.
+    fn owns_its_process(&self) -> bool {
+        true
+    }
 }
 
 /// CPU seconds this process has run so far, all its threads together

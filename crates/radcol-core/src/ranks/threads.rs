@@ -95,6 +95,10 @@ impl Ranks for Threads {
         }
     }
 
+    fn owns_its_process(&self) -> bool {
+        false
+    }
+
     fn seconds(&self) -> f64 {
         self.nanos.load(std::sync::atomic::Ordering::Relaxed) as f64 * 1e-9
     }

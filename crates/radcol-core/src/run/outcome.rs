@@ -181,7 +181,7 @@ pub struct RankFigures {
     /// for another rank: its plan and its blocks (wall time).
     pub work_s: f64,
     /// CPU seconds of that work (all its threads), where the platform
-    /// says: the measure of its share of the work when ranks outnumber
+    /// says and the rank is a process of its own: the measure of its share of the work when ranks outnumber
     /// cores and wall times include turns taken on a shared core.
     pub work_cpu_s: Option<f64>,
     /// Kernel evaluations of its blocks.

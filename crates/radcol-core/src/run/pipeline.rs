@@ -306,7 +306,10 @@ impl Stages<'_> {
         let rhs_s = t.elapsed().as_secs_f64();
 
         let t = Instant::now();
-        let cpu = cfg.distributed().and_then(|_| crate::ranks::cpu_seconds());
+        let cpu = cfg
+            .distributed()
+            .filter(|r| r.owns_its_process())
+            .and_then(|_| crate::ranks::cpu_seconds());
         let built = assemble(
             &disc,
             cfg,
