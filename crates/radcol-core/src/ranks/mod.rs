@@ -40,8 +40,8 @@ pub trait Ranks: Reduce + Send + Sync + std::fmt::Debug {
     /// waiting for the other ranks included.
     fn seconds(&self) -> f64;
     /// Whether this rank is a process of its own, so that the process's
-    /// CPU seconds are this rank's ([`cpu_seconds`]); false for ranks that
-    /// share one process.
+    /// CPU seconds are this rank's (`RankFigures::work_cpu_s`); false for
+    /// ranks that share one process.
     fn owns_its_process(&self) -> bool {
         true
     }
