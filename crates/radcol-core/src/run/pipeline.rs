@@ -306,10 +306,7 @@ impl Stages<'_> {
         let rhs_s = t.elapsed().as_secs_f64();
 
         let t = Instant::now();
-        let cpu = cfg
-            .distributed()
-            .filter(|r| r.owns_its_process())
-            .and_then(|_| crate::ranks::cpu_seconds());
+        let cpu = super::share::own_cpu_seconds(cfg);
         let built = assemble(
             &disc,
             cfg,
@@ -351,21 +348,8 @@ impl Stages<'_> {
             channels.iter_mut().for_each(ChannelResult::limit_negative);
         }
 
-        let ranks = built.operator.shared().map(|s| {
-            let (end, end_cpu) = s.built();
-            let mine = super::RankFigures {
-                rows: s.rows().len(),
-                stored_bytes: s.local().heap_bytes(),
-                assembly_s,
-                work_s: end.duration_since(t_assembly).as_secs_f64(),
-                work_cpu_s: cpu.zip(end_cpu).map(|(a, b)| b - a),
-                kernel_evals: built.kernel_evals,
-                products_s: s.product_seconds(),
-                gathers_s: s.gather_seconds(),
-                communication_s: s.ranks().seconds(),
-            };
-            super::RanksReport::gather(s.ranks(), mine)
-        });
+        let ranks = (built.operator.shared())
+            .map(|s| super::share::figures(s, (t_assembly, cpu), (assembly_s, built.kernel_evals)));
         let outcome = SolveOutcome {
             ranks,
             h,

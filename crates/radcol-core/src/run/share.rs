@@ -49,6 +49,37 @@ pub(super) fn build_share(
     Ok((GeometricOperator::Shared(share), entries.evaluations()))
 }
 
+/// In a solve spread over ranks, this rank's process's CPU seconds so far,
+/// when the rank is a process of its own (`Ranks::owns_its_process`).
+pub(super) fn own_cpu_seconds(cfg: &SolveConfig) -> Option<f64> {
+    cfg.distributed()
+        .filter(|r| r.owns_its_process())
+        .and_then(|_| crate::ranks::cpu_seconds())
+}
+
+/// What every rank held and spent, gathered from each rank's own (every
+/// rank calls it together): `share`, its assembly's start (the instant and
+/// [`own_cpu_seconds`] then), its seconds and its kernel evaluations.
+pub(super) fn figures(
+    share: &RowShare,
+    (began, cpu): (std::time::Instant, Option<f64>),
+    (assembly_s, kernel_evals): (f64, u64),
+) -> super::RanksReport {
+    let (end, end_cpu) = share.built();
+    let mine = super::RankFigures {
+        rows: share.rows().len(),
+        stored_bytes: share.local().heap_bytes(),
+        assembly_s,
+        work_s: end.duration_since(began).as_secs_f64(),
+        work_cpu_s: cpu.zip(end_cpu).map(|(a, b)| b - a),
+        kernel_evals,
+        products_s: share.product_seconds(),
+        gathers_s: share.gather_seconds(),
+        communication_s: share.ranks().seconds(),
+    };
+    super::RanksReport::gather(share.ranks(), mine)
+}
+
 /// This rank's share of `disc`'s compressed operator in a solve spread
 /// over `ranks`, decided before any plan: the rows it holds and the
 /// elements its plan classifies ([`crate::hmatrix::radiosity::layout`]),
