@@ -22,10 +22,10 @@ pub(crate) struct Seen {
     pub(crate) hidden: Vec<u32>,
 }
 
-/// Appends to `out` the candidate occluders of the pair (A, element k) and
-/// returns true, when another plan of the same mesh found them already
-/// (false: not known, nothing appended).
-pub(crate) type Known<'a> = &'a dyn Fn(usize, &mut Vec<u32>) -> bool;
+/// Appends to `out` (when given) the candidate occluders of the pair (A,
+/// element k) and returns true, when another plan of the same mesh found
+/// them already (false: not known, nothing appended).
+pub(crate) type Known<'a> = &'a dyn Fn(usize, Option<&mut Vec<u32>>) -> bool;
 
 /// What flat element `a` (the row block's, with row points `rows`:
 /// position and unit normal) sees: every element `k` with `live[k]` (not
@@ -321,11 +321,19 @@ impl Walk<'_> {
         if node.end - node.start == 1 {
             // The node is the element itself.
             let k = node.start;
-            if !self.known.is_some_and(|known| known(k, &mut cands)) {
+            if !self.known.is_some_and(|known| known(k, Some(&mut cands))) {
                 self.candidates(self.flat_geom[k], among, &mut cands);
             }
             self.mark(k, &cands, seen);
             return;
+        }
+        if self.known_below(node) {
+            // Every element below has its candidates from the other plan:
+            // the node's own search would only bound theirs.
+            for &child in &node.children {
+                self.visit(child, None, seen);
+            }
+            return self.visit_rest(node, None, seen);
         }
         self.candidates((node.vertices, node.normal), among, &mut cands);
         if cands.is_empty() || self.hidden(&node.vertices, &cands) {
@@ -339,13 +347,26 @@ impl Walk<'_> {
         for &child in &node.children {
             self.visit(child, Some(&cands), seen);
         }
-        // Elements not in refinement order (not produced by radcol's meshes):
-        // tested one by one against this node's candidates.
+        self.visit_rest(node, Some(&cands), seen);
+    }
+
+    /// Whether the other plan gave the candidates of every live element
+    /// below `node` (then its walk searches none of them).
+    fn known_below(&self, node: &TreeNode) -> bool {
+        self.known
+            .is_some_and(|known| (node.start..node.end).all(|k| !self.live(k) || known(k, None)))
+    }
+
+    /// Elements not in refinement order (not produced by radcol's meshes):
+    /// tested one by one against `node`'s candidates `among`.
+    fn visit_rest(&self, node: &TreeNode, among: Option<&[u32]>, seen: &mut Seen) {
         let mut one = Vec::new();
         for k in node.rest..node.end {
             if self.live(k) {
                 one.clear();
-                self.candidates(self.flat_geom[k], Some(&cands), &mut one);
+                if !self.known.is_some_and(|known| known(k, Some(&mut one))) {
+                    self.candidates(self.flat_geom[k], among, &mut one);
+                }
                 self.mark(k, &one, seen);
             }
         }

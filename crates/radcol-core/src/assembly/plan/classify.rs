@@ -235,14 +235,15 @@ pub(super) fn classify_all(
                 // searched: partly visible ones hold their candidates, far
                 // and near ones have none; the rest (culled) are searched.
                 let known_row = known.map(|p| (p.classes.row(kp, 0..n), &p.partial[kp]));
-                let lookup = |k: usize, out: &mut Vec<u32>| -> bool {
+                let lookup = |k: usize, out: Option<&mut Vec<u32>>| -> bool {
                     let Some((classes, partial)) = known_row.as_ref() else {
                         return false;
                     };
                     match PairClass::from_code(classes[k]) {
-                        PairClass::Partial => {
-                            partial.get(k).map(|c| out.extend_from_slice(c)).is_some()
-                        }
+                        PairClass::Partial => match out {
+                            Some(out) => partial.get(k).map(|c| out.extend_from_slice(c)).is_some(),
+                            None => partial.get(k).is_some(),
+                        },
                         PairClass::Far(_) | PairClass::Near => true,
                         _ => false,
                     }
