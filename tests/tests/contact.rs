@@ -10,7 +10,7 @@ use radcol_core::assembly::CpuBackend;
 use radcol_core::geometry::{Identity, Patch, Surface};
 use radcol_core::problem::{Field, Problem};
 use radcol_core::run::adapt::{solve_adaptive, AdaptOptions, StopReason};
-use radcol_core::run::{solve, SolveConfig};
+use radcol_core::run::{solve, RelativeTo, SolveConfig};
 use radcol_core::scene::{Material, SceneBuilder};
 use std::sync::Arc;
 
@@ -201,10 +201,12 @@ fn the_size_floor_stops_the_loop_before_rounding_does() {
         level: 1,
         ..Default::default()
     };
+    // Relative to max u (the emitter): the steps below were read in it.
     let opts = AdaptOptions {
         target: 5e-3,
         stall_generations: 0,
         max_steps: 40,
+        relative_to: RelativeTo::MaxU,
         ..Default::default()
     };
     let res = solve_adaptive(&imprinted(), &cfg, &opts, &CpuBackend, |_| {}).unwrap();

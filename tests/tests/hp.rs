@@ -25,7 +25,7 @@ use radcol_core::geometry::shapes::floor_under_occluder;
 use radcol_core::nodes::NodeSet;
 use radcol_core::norms::LATTICE;
 use radcol_core::run::adapt::{solve_adaptive, AdaptOptions, StopReason};
-use radcol_core::run::{solve, SolveConfig, SolveOutcome};
+use radcol_core::run::{solve, RelativeTo, SolveConfig, SolveOutcome};
 use std::sync::Arc;
 
 /// Degrees a per-element choice may take.
@@ -402,9 +402,12 @@ fn adaptive(case: &Case, r: usize, tol: f64, hp: bool) -> (usize, f64, f64) {
         level: 1,
         ..Default::default()
     };
+    // Relative to max u (the emitter's 1), in which the cheapest meshes
+    // were measured.
     let opts = AdaptOptions {
         target: tol,
         hp,
+        relative_to: RelativeTo::MaxU,
         ..Default::default()
     };
     let t = std::time::Instant::now();

@@ -17,7 +17,7 @@ use radcol_core::geometry::shapes::floor_under_occluder;
 use radcol_core::mesh::Site;
 use radcol_core::problem::{Field, Problem};
 use radcol_core::run::adapt::{solve_adaptive, AdaptOptions, StopReason};
-use radcol_core::run::{solve, OperatorChoice, SolveConfig};
+use radcol_core::run::{solve, OperatorChoice, RelativeTo, SolveConfig};
 use std::f64::consts::PI;
 use std::sync::Arc;
 
@@ -182,8 +182,11 @@ fn adaptive_refinement_reaches_1e_3_on_the_shadow_family() {
             level: 1,
             ..Default::default()
         };
+        // 1e-3 of max u, the emitter's 1: the uniform levels below are
+        // compared in that norm.
         let opts = AdaptOptions {
             target: 1e-3,
+            relative_to: RelativeTo::MaxU,
             ..Default::default()
         };
         let t = std::time::Instant::now();
@@ -414,7 +417,7 @@ fn to_reflected_target(case: &Case, target: f64) -> radcol_core::run::adapt::Ada
     };
     let opts = AdaptOptions {
         target,
-        relative_to: radcol_core::estimate::RelativeTo::Reflected,
+        relative_to: RelativeTo::Reflected,
         ..Default::default()
     };
     solve_adaptive(&problem(case), &cfg, &opts, &CpuBackend, |_| {}).expect("solves")

@@ -813,8 +813,13 @@ fn shadow_scene_reaches_its_target() {
     assert!(num(ad, "reached_estimate") <= 1e-2);
     assert_eq!(v["visibility"]["needed"], true);
     for ch in v["channels"].as_array().unwrap() {
-        assert!(num(&ch["estimate"], "max_rel") <= 1e-2, "{ch}");
+        assert!(num(&ch["estimate_relative"], "shown") <= 1e-2, "{ch}");
     }
+}
+
+/// `a` equals `b` to rounding.
+fn same_to_rounding(a: f64, b: f64, what: &str) {
+    assert!((a - b).abs() <= 1e-12 * b.abs(), "{what}: {a} against {b}");
 }
 
 /// The loop stops on the estimated error of what it shows: on the Cornell
@@ -839,12 +844,24 @@ fn the_target_holds_for_what_is_shown() {
         .filter(|ch| !ch["limited"].is_null())
         .count();
     assert!(limited > 0, "the box is expected to need the limiter: {v}");
+    // The target and the figures it stops on are relative to the reflected
+    // light, the default.
+    assert_eq!(ad["relative_to"], "reflected");
     let shown = channels
         .iter()
         .map(|ch| {
             let est = &ch["estimate"];
-            let s = num(ch, "estimate_shown");
-            assert!(s >= num(est, "max_rel"), "{ch}");
+            let rel = &ch["estimate_relative"];
+            assert_eq!(rel["relative_to"], "reflected", "{ch}");
+            let s = num(rel, "shown");
+            assert!(s >= num(rel, "max"), "{ch}");
+            let scale = num(est, "reflected_scale");
+            same_to_rounding(num(rel, "max"), num(est, "max") / scale, "max");
+            same_to_rounding(
+                s,
+                num(ch, "estimate_shown") * num(est, "scale") / scale,
+                "shown",
+            );
             s
         })
         .fold(0.0f64, f64::max);

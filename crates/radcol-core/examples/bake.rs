@@ -7,7 +7,7 @@
 //!     cargo run --release -p radcol-core --example bake -- [SCENE] [TARGET] [OUT.ppm] [LIGHTMAP.ppm]
 //!
 //! SCENE is a `.obj`, `.gltf` or `.glb` file or a built-in name (default
-//! `cornell`), TARGET the estimated max error relative to max u (default
+//! `cornell`), TARGET the estimated max error relative to the reflected light (default
 //! 1e-2), OUT a binary PPM image of the scene's camera view, LIGHTMAP the
 //! scene's 1024² lightmap atlas, tone-mapped (default: neither).
 

@@ -170,7 +170,7 @@ pub enum InputError {
         max: f64,
     },
     /// A target error outside [`crate::run::adapt::MIN_TARGET`], 1).
-    #[error("target error {value} must lie in [1e-8, 1): it is the max error relative to max |u|, and the estimate's integrals are accurate to 1e-9")]
+    #[error("target error {value} must lie in [1e-8, 1): it is the max error relative to the reflected light (or to max |u|), and the estimate's integrals are accurate to 1e-9")]
     TargetError {
         /// The target asked for.
         value: f64,

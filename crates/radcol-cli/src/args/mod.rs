@@ -293,8 +293,8 @@ pub struct StudyArgs {
     )]
     pub degrees: Option<String>,
 
-    /// For each degree, also refine adaptively to TOL (estimated max error relative to max
-    /// |u|) from the first level: every step is a row of the comparison.
+    /// For each degree, also refine adaptively to TOL (estimated max error relative to the
+    /// reflected light, max |u| where nothing is reflected) from the first level: every step is a row of the comparison.
     #[arg(
         help_heading = "Accuracy",
         long,

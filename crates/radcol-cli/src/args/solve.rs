@@ -33,7 +33,8 @@ or with --target-error its own triangles]"))]
     )]
     pub max_edge: Option<f64>,
 
-    /// Refine adaptively until the estimated max error relative to max |u| is at most TOL,
+    /// Refine adaptively until the estimated max error relative to the reflected light
+    /// (--relative-to) is at most TOL,
     /// in (0, 1): the elements with the largest estimates are split 4:1 and the problem
     /// re-solved, from --level/--max-edge (a scene with materials given neither: its own
     /// triangles). Points where the error stops falling under refinement (the foot of a
@@ -47,14 +48,15 @@ or with --target-error its own triangles]"))]
     )]
     pub target_error: Option<f64>,
 
-    /// With --target-error: what TOL is relative to: max |u| (in a lit scene, the light
-    /// itself) or the light the surfaces reflect (docs/accuracy.md).
+    /// With --target-error: what TOL is relative to: the light the surfaces reflect
+    /// (max over the nodes of u − E; max |u| where nothing is reflected) or max |u| (in a
+    /// lit scene, the light itself) (docs/accuracy.md).
     #[arg(
         help_heading = "Accuracy",
         long,
         value_enum,
         requires = "target_error",
-        default_value_t = RelativeToArg::MaxU
+        default_value_t = RelativeToArg::Reflected
     )]
     pub relative_to: RelativeToArg,
 

@@ -11,8 +11,8 @@ use std::fmt;
 /// The loop as run.
 #[derive(Clone, Debug, Serialize)]
 pub struct AdaptReport {
-    /// Target of the estimated max error relative to max |u|, or to the
-    /// reflected light (`relative_to`).
+    /// Target of the estimated max error relative to the reflected light,
+    /// or to max |u| (`relative_to`).
     target: f64,
     /// What the target and the steps' figures are relative to.
     relative_to: RelativeTo,
@@ -77,7 +77,7 @@ impl AdaptReport {
             _ => "",
         };
         let of = match self.relative_to {
-            RelativeTo::MaxU => "",
+            RelativeTo::MaxU => " of max|u|",
             RelativeTo::Reflected => " of the reflected light",
         };
         format!(
@@ -155,8 +155,12 @@ impl fmt::Display for AdaptReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
-            "  adaptive    target {} (max error / max |u|, estimated){}{}",
+            "  adaptive    target {} (max error {}, estimated){}{}",
             sci(self.target),
+            match self.relative_to {
+                RelativeTo::MaxU => "/ max |u|",
+                RelativeTo::Reflected => "relative to the reflected light",
+            },
             self.max_unknowns
                 .map(|m| format!(", at most {m} unknowns"))
                 .unwrap_or_default(),

@@ -1,7 +1,7 @@
 //! `radcol solve`: mesh, problem, visibility, backend, assembly, timings and
 //! per-channel results.
 
-use super::channel::{fmt_estimate, fmt_limited};
+use super::channel::{fmt_estimate, fmt_limited, RelativeFigures};
 use super::operator::{self, OperatorReport};
 use super::{alpha_text, precise, sci, secs, AdaptReport, ProblemText};
 use crate::setup::Setup;
@@ -82,6 +82,9 @@ pub struct ChannelReport {
     estimate: Option<ErrorEstimate>,
     /// [`ErrorEstimate::shown_max_rel`]: the limiter's change included.
     estimate_shown: Option<f64>,
+    /// The estimate's figures as the report leads with them: relative to
+    /// the reflected light, or to max |u| where nothing is reflected.
+    estimate_relative: Option<RelativeFigures>,
     /// Estimated over true global max error, when both are known.
     effectivity: Option<f64>,
     /// What the positivity limiter changed for display, when u_n < 0
@@ -228,6 +231,7 @@ impl SolveReport {
                     errors: c.errors,
                     estimate: c.estimate.clone(),
                     estimate_shown: c.estimate.as_ref().map(ErrorEstimate::shown_max_rel),
+                    estimate_relative: c.estimate.as_ref().map(RelativeFigures::new),
                     effectivity: match (&c.errors, &c.estimate) {
                         (Some(e), Some(est)) if e.global_max > 0.0 => Some(est.max / e.global_max),
                         _ => None,

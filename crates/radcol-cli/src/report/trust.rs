@@ -100,11 +100,12 @@ pub fn solve_warnings(
             ));
         }
         if let Some(e) = &ch.estimate {
-            if e.max_rel > 0.1 {
+            let (scale, of) = super::channel::norm(e);
+            if e.max / scale > 0.1 {
                 w.push(format!(
-                    "channel {}: estimated error {} of max |u|: refine (--level, --max-edge or --target-error)",
+                    "channel {}: estimated error {} {of}: refine (--level, --max-edge or --target-error)",
                     ch.name,
-                    sci(e.max_rel)
+                    sci(e.max / scale)
                 ));
             }
         }

@@ -273,7 +273,7 @@ fn adapt(
 ) -> Result<AdaptOptions, BadInput> {
     if !(MIN_TARGET..1.0).contains(&target) {
         return Err(bad_input(format!(
-            "--target-error {target:e}: the target (max error relative to max |u|) must lie in [{MIN_TARGET:e}, 1): the error estimate's integrals are accurate to 1e-9"
+            "--target-error {target:e}: the target (max error relative to the reflected light, or to max |u|) must lie in [{MIN_TARGET:e}, 1): the error estimate's integrals are accurate to 1e-9"
         )));
     }
     if max_unknowns == Some(0) {
@@ -331,7 +331,7 @@ fn study_job(a: StudyArgs) -> Result<StudyJob> {
     if let Some(t) = a.adaptive {
         if !(MIN_TARGET..1.0).contains(&t) {
             return Err(bad_input(format!(
-                "--adaptive {t:e}: the target (max error relative to max |u|) must lie in [{MIN_TARGET:e}, 1): the error estimate's integrals are accurate to 1e-9"
+                "--adaptive {t:e}: the target (max error relative to the reflected light, or to max |u|) must lie in [{MIN_TARGET:e}, 1): the error estimate's integrals are accurate to 1e-9"
             ))
             .into());
         }

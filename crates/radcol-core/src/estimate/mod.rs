@@ -118,11 +118,11 @@ pub fn check_discretization(disc: &Discretization) -> Discretization {
 #[serde(rename_all = "snake_case")]
 pub enum RelativeTo {
     /// max |u_n|: in a lit scene, the emitters' own radiosity.
-    #[default]
     MaxU,
     /// The reflected light, max over the nodes of u_n − E
     /// ([`ErrorEstimate::reflected_scale`]): what a viewer sees on lit
-    /// surfaces. Where nothing is reflected, max |u_n|.
+    /// surfaces, and the default. Where nothing is reflected, max |u_n|.
+    #[default]
     Reflected,
 }
 

@@ -67,15 +67,16 @@ pub struct Settings {
     /// Progress observer; cancel the solve through it
     /// ([`crate::progress::Cancel`]).
     pub progress: Option<ProgressHandle>,
-    /// What `target_error` is relative to: max |u| (the default, as the
-    /// command's; in a lit scene the light itself) or the light the
-    /// surfaces reflect.
+    /// What `target_error` is relative to: the light the surfaces reflect
+    /// (the default, as the command's; max over the nodes of u − E, or max
+    /// |u| where nothing is reflected) or max |u| (in a lit scene the light
+    /// itself).
     pub relative_to: RelativeTo,
 }
 
 impl Settings {
-    /// Adaptive refinement to `target_error` (relative to max |u|), the
-    /// rest as [`Settings::default`].
+    /// Adaptive refinement to `target_error` (relative to the reflected
+    /// light), the rest as [`Settings::default`].
     pub fn target(target_error: f64) -> Self {
         Self {
             target_error: Some(target_error),
@@ -176,7 +177,7 @@ impl Radiosity {
         if !problem.emits() {
             return Err(InputError::NoEmission.into());
         }
-        let relative_to = adapt.map_or(RelativeTo::MaxU, |a| a.relative_to);
+        let relative_to = adapt.map_or(RelativeTo::default(), |a| a.relative_to);
         let (outcome, refinement, adapt) = match adapt {
             None => (solve(&problem, &config, backend)?, None, None),
             Some(opts) => {
@@ -206,7 +207,7 @@ impl Radiosity {
     }
 
     /// Refines further, from the mesh solved on, until the estimate is
-    /// below `target` (relative as the solve's [`Settings::relative_to`], to max |u| by default)
+    /// below `target` (relative as the solve's [`Settings::relative_to`], to the reflected light by default)
     /// or a budget stops it, as the adaptive loop would have gone on: its
     /// new steps are appended to [`Radiosity::refinement`]. The first
     /// split is decided by the estimate at hand; after a relight, or

@@ -7,8 +7,8 @@ use serde::Serialize;
 /// What the adaptive loop aims for and may spend.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct AdaptOptions {
-    /// Target of the estimated max error relative to max |u_n| (or, with
-    /// [`AdaptOptions::relative_to`], to the reflected light), per channel,
+    /// Target of the estimated max error relative to the reflected light
+    /// (or, with [`AdaptOptions::relative_to`], to max |u_n|), per channel,
     /// in (0, 1).
     pub target: f64,
     /// No step with more unknowns than this (None: as many as the dense
@@ -67,8 +67,9 @@ pub struct AdaptOptions {
     /// only; with another backend the start is not graded.
     pub graded_start: bool,
     /// What `target` (and every relative figure of the steps) is relative
-    /// to: max |u_n| (the default; in a lit scene, the light itself) or the
-    /// reflected light, max over the nodes of u_n − E.
+    /// to: the reflected light, max over the nodes of u_n − E (the default;
+    /// max |u_n| where nothing is reflected), or max |u_n| (in a lit scene,
+    /// the light itself).
     pub relative_to: RelativeTo,
 }
 
@@ -114,7 +115,7 @@ impl Default for AdaptOptions {
             estimate_within: ESTIMATE_WITHIN,
             hp: false,
             graded_start: true,
-            relative_to: RelativeTo::MaxU,
+            relative_to: RelativeTo::Reflected,
         }
     }
 }
