@@ -3,9 +3,10 @@
 
 use radcol_core::render::Image;
 
-/// The decades the colour scale spans: 10^LOW (dark) … 10^HIGH (bright).
-/// Fixed, so that maps of two runs compare by eye.
-pub const DECADES: (i32, i32) = (-6, -1);
+/// The decades the colour scale spans: 10^LOW (dark) … 10^HIGH (bright),
+/// of the reflected light: bright is an error as large as the brightest
+/// reflected light. Fixed, so that maps of two runs compare by eye.
+pub const DECADES: (i32, i32) = (-5, 0);
 
 /// Height of the colour bar in pixels (none on images lower than 4 bars).
 const BAR: u32 = 10;
@@ -71,13 +72,13 @@ mod tests {
     /// and brightness grows with the error.
     #[test]
     fn scale_is_logarithmic_and_clamped() {
-        let dark = colour(1e-6);
+        let dark = colour(1e-5);
         assert_eq!(dark, colour(1e-9));
         assert_eq!(dark, colour(0.0));
-        assert_eq!(colour(1e-1), colour(0.5));
+        assert_eq!(colour(1.0), colour(5.0));
         let lum = |c: [u8; 3]| 0.2126 * c[0] as f64 + 0.7152 * c[1] as f64 + 0.0722 * c[2] as f64;
         let mut last = -1.0;
-        for k in -6..=-1 {
+        for k in -5..=0 {
             let l = lum(colour(10f64.powi(k)));
             assert!(l > last, "decade {k}: {l} after {last}");
             last = l;
@@ -102,8 +103,8 @@ mod tests {
         assert_eq!(px[0], NOTHING);
         assert_eq!(px[1], colour(1e-3));
         let bottom = |x: u32| px[((h - 1) * w + x) as usize];
-        assert_eq!(bottom(0), colour(1e-6));
-        assert_eq!(bottom(w - 1), colour(1e-1));
+        assert_eq!(bottom(0), colour(1e-5));
+        assert_eq!(bottom(w - 1), colour(1.0));
         let top_of_bar = (h - BAR) * w;
         let ticks = (0..w)
             .filter(|&x| px[(top_of_bar + x) as usize] == [255, 255, 255])

@@ -11,7 +11,7 @@ use crate::validate::{Output, OutputFile, OutputKind};
 use anyhow::{Context, Result};
 use radcol_core::export;
 use radcol_core::render::{self, Image, VertexMesh};
-use radcol_core::run::{Mesh, Solution, SolveOutcome};
+use radcol_core::run::{Mesh, RelativeTo, Solution, SolveOutcome};
 use std::time::Instant;
 
 /// Writes every `--out` file, rendering the image and tessellating the
@@ -167,7 +167,7 @@ fn write_error_map(o: &Output, look: &Look, out: &SolveOutcome, t: Instant) -> R
     Ok(Written {
         path,
         what: format!(
-            "{}×{} error map (estimated max error / max |u| per element, log scale 1e{lo} .. 1e{hi})",
+            "{}×{} error map (estimated max error per element relative to the reflected light, log scale 1e{lo} .. 1e{hi})",
             img.width, img.height
         ),
         value: value_of(o.kind, out),
@@ -205,12 +205,15 @@ fn vertex_values(vm: &radcol_core::render::VertexMesh, per_element: &[f64]) -> V
 }
 
 /// Per element, the worst channel's estimated max error relative to its
-/// max |u_n| (None without an estimate).
+/// reflected light (max |u_n| where nothing is reflected), as the report's
+/// figures; None without an estimate.
 pub fn element_estimates(out: &SolveOutcome) -> Option<Vec<f64>> {
     let mut worst = vec![0.0f64; out.discretization.mesh().len()];
     for ch in &out.channels {
-        for (w, e) in worst.iter_mut().zip(ch.estimate.as_ref()?.elements_rel()) {
-            *w = w.max(e);
+        let estimate = ch.estimate.as_ref()?;
+        let to_reflected = estimate.rescale(RelativeTo::Reflected);
+        for (w, e) in worst.iter_mut().zip(estimate.elements_rel()) {
+            *w = w.max(e * to_reflected);
         }
     }
     Some(worst)

@@ -137,8 +137,8 @@ from up to {DEFAULT_SNAP:e} of the scene's diagonal away. The values are in the 
     pub at_out: Option<PathBuf>,
 
     /// Write a PNG map of the estimated error seen by --camera: each element coloured by its
-    /// estimated max error relative to max |u| (worst channel), log scale from 1e-6 (dark)
-    /// to 1e-1 (bright), a colour bar with a tick per decade along the bottom edge.
+    /// estimated max error relative to the reflected light (worst channel), log scale from
+    /// 1e-5 (dark) to 1 (bright), a colour bar with a tick per decade along the bottom edge.
     #[arg(help_heading = "Output", long, value_name = "FILE.png")]
     pub error_map: Option<PathBuf>,
 

@@ -32,7 +32,8 @@ fn radiosity_properties(channel_names: &[&str]) -> Result<Vec<String>> {
 /// (float), `red green blue` (uchar, `tm` applied to the radiance u/π as for
 /// images, sRGB-encoded), one float per channel with the raw radiosity u_n
 /// and, when given, `error_estimate` (float: the estimated max error of the
-/// vertex's element relative to max |u_n|, one value per vertex); faces as
+/// vertex's element, relative as the caller says: `radcol solve` gives it
+/// relative to the reflected light; one value per vertex); faces as
 /// `list uchar int vertex_indices`.
 pub fn write<W: Write>(
     mut w: W,
