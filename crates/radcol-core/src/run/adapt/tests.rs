@@ -154,6 +154,7 @@ fn budget_caps_the_split() {
 /// its u_n differs from the same mesh solved to 1e-13 by at most
 /// [`ALGEBRAIC_SHARE`] of the target at every node. Fails if the bound is
 /// not kept, or if the tolerance is not relaxed at all.
+#[cfg(feature = "scenes")]
 #[test]
 fn later_steps_solve_only_as_far_as_the_target_needs() {
     let scene = crate::scene::builtin("cornell").unwrap().unwrap();
