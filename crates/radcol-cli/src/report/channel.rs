@@ -9,9 +9,19 @@ use std::fmt;
 /// reflected light (max over the nodes of u_n − E), or max |u_n| where
 /// nothing is reflected.
 pub(super) fn norm(e: &ErrorEstimate) -> (f64, &'static str) {
-    match e.scale_of(RelativeTo::Reflected) {
-        s if e.reflected_scale > 0.0 => (s, "of the reflected light"),
-        s => (s.max(f64::MIN_POSITIVE), "of max|u|"),
+    match norm_of(e) {
+        RelativeTo::Reflected => (e.reflected_scale, "of the reflected light"),
+        RelativeTo::MaxU => (e.scale.max(f64::MIN_POSITIVE), "of max|u|"),
+    }
+}
+
+/// Which norm a channel's figures read in: the reflected light, or max
+/// |u_n| where nothing is reflected.
+fn norm_of(e: &ErrorEstimate) -> RelativeTo {
+    if e.reflected_scale > 0.0 {
+        RelativeTo::Reflected
+    } else {
+        RelativeTo::MaxU
     }
 }
 
@@ -33,11 +43,7 @@ pub struct RelativeFigures {
 
 impl RelativeFigures {
     pub(super) fn new(e: &ErrorEstimate) -> Self {
-        let to = if e.reflected_scale > 0.0 {
-            RelativeTo::Reflected
-        } else {
-            RelativeTo::MaxU
-        };
+        let to = norm_of(e);
         let factor = e.rescale(to);
         Self {
             relative_to: to,
